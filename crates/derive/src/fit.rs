@@ -1,0 +1,514 @@
+//! The stiffness fit of the paper's eq. (15): `min_k ‖Ωᵀ K_S(k) Ω − K_D‖_F²`.
+//!
+//! `K_S` is linear in the spring constants, `K_S = Σ_c k_c G_c` (SPEC §5), so with
+//! `H_c = Ωᵀ G_c Ω` the problem is linear least squares in `k`: the normal equations
+//! `A k = b` with `A_cd = ⟨H_c, H_d⟩_F` and `b_c = ⟨H_c, K_D⟩_F` (SPEC §6). The products are
+//! formed sparse (never a dense `3N × 3N` product). The paper solved (15) with a trust-region
+//! method; [`StiffnessFit::trust_region`] does the same and must land on the closed form.
+
+use nurbspring_linalg::{DenseMatrix, SparseMatrix, symmetric_eigen};
+use nurbspring_msm::SpringKind;
+use serde::Serialize;
+
+use crate::DeriveError;
+
+/// Which rows and columns of `K_D` (and of `Ωᵀ K_S Ω`) enter the fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitDofs {
+    /// Every generalized coordinate: the paper's literal eq. (15).
+    All,
+    /// Only the free (unconstrained) generalized coordinates.
+    Free,
+}
+
+impl FitDofs {
+    /// "all" or "free".
+    pub fn name(self) -> &'static str {
+        match self {
+            FitDofs::All => "all",
+            FitDofs::Free => "free",
+        }
+    }
+}
+
+/// The fit problem: the matrices `H_c`, the target `K_D` and the normal equations.
+#[derive(Clone, Debug)]
+pub struct StiffnessFit {
+    kinds: Vec<SpringKind>,
+    h: Vec<SparseMatrix>,
+    k_d: SparseMatrix,
+    gram: DenseMatrix,
+    rhs: Vec<f64>,
+    k_d_norm: f64,
+}
+
+/// Outcome of the trust-region iteration.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TrustRegionOutcome {
+    /// Spring constants found.
+    pub k: Vec<f64>,
+    /// Iterations taken.
+    pub iterations: usize,
+    /// Norm of the (projected) gradient at the end.
+    pub gradient_norm: f64,
+}
+
+impl StiffnessFit {
+    /// Sets up the fit. `unit` holds `(class, G_c)` for every spring class present (3N_nodes
+    /// square); `omega` is Ω (3N_nodes × n); `k_d` is n × n; `dofs` selects the generalized
+    /// coordinates that enter (None = all).
+    pub fn new(
+        k_d: &SparseMatrix,
+        omega: &SparseMatrix,
+        unit: &[(SpringKind, SparseMatrix)],
+        n_springs: usize,
+        dofs: Option<&[usize]>,
+    ) -> Result<Self, DeriveError> {
+        if unit.is_empty() || n_springs < unit.len() {
+            return Err(DeriveError::TooFewSprings {
+                classes: unit.len(),
+                springs: n_springs,
+            });
+        }
+        if k_d.nrows() != omega.ncols() || k_d.ncols() != omega.ncols() {
+            return Err(DeriveError::DimensionMismatch {
+                what: "K_D against the columns of Ω",
+                expected: omega.ncols(),
+                found: k_d.nrows(),
+            });
+        }
+        let omega_sel = match dofs {
+            Some(d) => {
+                let rows: Vec<usize> = (0..omega.nrows()).collect();
+                omega.submatrix(&rows, d)
+            }
+            None => omega.clone(),
+        };
+        let k_d = match dofs {
+            Some(d) => k_d.submatrix(d, d),
+            None => k_d.clone(),
+        };
+        let omega_t = omega_sel.transpose();
+        let mut kinds = Vec::with_capacity(unit.len());
+        let mut h = Vec::with_capacity(unit.len());
+        for (kind, g) in unit {
+            if g.nrows() != omega.nrows() {
+                return Err(DeriveError::DimensionMismatch {
+                    what: "G_c against the rows of Ω",
+                    expected: omega.nrows(),
+                    found: g.nrows(),
+                });
+            }
+            let hc = omega_t.matmul(&g.matmul(&omega_sel)?)?;
+            kinds.push(*kind);
+            h.push(hc);
+        }
+        let c = kinds.len();
+        let gram = DenseMatrix::from_fn(c, c, |i, j| h[i].frobenius_dot(&h[j]));
+        let rhs: Vec<f64> = h.iter().map(|hc| hc.frobenius_dot(&k_d)).collect();
+        let k_d_norm = k_d.frobenius_norm();
+        let fit = Self {
+            kinds,
+            h,
+            k_d,
+            gram,
+            rhs,
+            k_d_norm,
+        };
+        fit.check_identifiable()?;
+        Ok(fit)
+    }
+
+    fn check_identifiable(&self) -> Result<(), DeriveError> {
+        let c = self.kinds.len();
+        let norms: Vec<f64> = (0..c).map(|i| self.gram[(i, i)].sqrt()).collect();
+        let scale = norms.iter().cloned().fold(0.0, f64::max);
+        let mut problems = Vec::new();
+        for i in 0..c {
+            if norms[i] <= 1e-12 * scale.max(f64::MIN_POSITIVE) {
+                problems.push(format!(
+                    "{} springs contribute nothing on the selected dofs (Ωᵀ G Ω = 0)",
+                    self.kinds[i].name()
+                ));
+            }
+        }
+        if problems.is_empty() && c > 1 {
+            // Normalized Gram matrix: its smallest eigenvalue measures linear dependence.
+            let normalized =
+                DenseMatrix::from_fn(c, c, |i, j| self.gram[(i, j)] / (norms[i] * norms[j]));
+            let eig = symmetric_eigen(&normalized)?;
+            if eig.values[0] < 1e-10 {
+                let v = eig.vectors.column(0);
+                let involved: Vec<&str> = (0..c)
+                    .filter(|&i| v[i].abs() > 1e-3)
+                    .map(|i| self.kinds[i].name())
+                    .collect();
+                problems.push(format!(
+                    "the classes {} give linearly dependent stiffness on the selected dofs (smallest normalized Gram eigenvalue {:.3e})",
+                    involved.join(", "),
+                    eig.values[0]
+                ));
+            }
+        }
+        if problems.is_empty() {
+            Ok(())
+        } else {
+            Err(DeriveError::SingularFit {
+                detail: problems.join("; "),
+            })
+        }
+    }
+
+    /// The spring classes, in the order of `k`.
+    pub fn kinds(&self) -> &[SpringKind] {
+        &self.kinds
+    }
+
+    /// The Gram matrix `A_cd = ⟨H_c, H_d⟩_F`.
+    pub fn gram(&self) -> &DenseMatrix {
+        &self.gram
+    }
+
+    /// The right-hand side `b_c = ⟨H_c, K_D⟩_F`.
+    pub fn rhs(&self) -> &[f64] {
+        &self.rhs
+    }
+
+    /// `H_c = Ωᵀ G_c Ω` on the selected dofs.
+    pub fn h(&self, class: usize) -> &SparseMatrix {
+        &self.h[class]
+    }
+
+    /// `‖K_D‖_F` on the selected dofs.
+    pub fn k_d_norm(&self) -> f64 {
+        self.k_d_norm
+    }
+
+    /// `Ωᵀ K_S(k) Ω` on the selected dofs.
+    pub fn model_matrix(&self, k: &[f64]) -> Result<SparseMatrix, DeriveError> {
+        let mut acc = SparseMatrix::zeros(self.k_d.nrows(), self.k_d.ncols());
+        for (hc, &kc) in self.h.iter().zip(k) {
+            acc = SparseMatrix::linear_combination(1.0, &acc, kc, hc)?;
+        }
+        Ok(acc)
+    }
+
+    /// Relative residual `‖Ωᵀ K_S(k) Ω − K_D‖_F / ‖K_D‖_F`, formed explicitly (no cancellation).
+    pub fn relative_residual(&self, k: &[f64]) -> Result<f64, DeriveError> {
+        let m = self.model_matrix(k)?;
+        let diff = SparseMatrix::linear_combination(1.0, &m, -1.0, &self.k_d)?;
+        Ok(diff.frobenius_norm() / self.k_d_norm.max(f64::MIN_POSITIVE))
+    }
+
+    /// Closed-form solution of the normal equations (SPEC §6); with `nonnegative`, the exact
+    /// solution of the convex quadratic program over `k ≥ 0` by enumerating active sets (the
+    /// number of classes is small) and keeping the KKT point.
+    pub fn solve(&self, nonnegative: bool) -> Result<Vec<f64>, DeriveError> {
+        let c = self.kinds.len();
+        if !nonnegative {
+            return self.solve_subset(&(0..c).collect::<Vec<_>>());
+        }
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        for mask in 0u32..(1 << c) {
+            let subset: Vec<usize> = (0..c).filter(|i| mask & (1 << i) != 0).collect();
+            let k = if subset.is_empty() {
+                vec![0.0; c]
+            } else {
+                match self.solve_subset(&subset) {
+                    Ok(k) => k,
+                    Err(_) => continue,
+                }
+            };
+            if k.iter().any(|&x| x < 0.0) {
+                continue;
+            }
+            let obj = self.objective(&k);
+            if best.as_ref().is_none_or(|(b, _)| obj < *b) {
+                best = Some((obj, k));
+            }
+        }
+        Ok(best.map(|(_, k)| k).unwrap_or_else(|| vec![0.0; c]))
+    }
+
+    fn solve_subset(&self, subset: &[usize]) -> Result<Vec<f64>, DeriveError> {
+        let n = subset.len();
+        let a = DenseMatrix::from_fn(n, n, |i, j| self.gram[(subset[i], subset[j])]);
+        let b: Vec<f64> = subset.iter().map(|&i| self.rhs[i]).collect();
+        let ks = nurbspring_linalg::cholesky_solve_dense(&a, &b)?;
+        let mut k = vec![0.0; self.kinds.len()];
+        for (i, &s) in subset.iter().enumerate() {
+            k[s] = ks[i];
+        }
+        Ok(k)
+    }
+
+    /// `f(k) = (kᵀ A k − 2 bᵀ k) / ‖K_D‖²`, which is the squared relative residual minus 1.
+    fn objective(&self, k: &[f64]) -> f64 {
+        let ak = self.gram.mul_vec(k);
+        let quad: f64 = k.iter().zip(&ak).map(|(x, y)| x * y).sum();
+        let lin: f64 = k.iter().zip(&self.rhs).map(|(x, y)| x * y).sum();
+        (quad - 2.0 * lin) / (self.k_d_norm * self.k_d_norm).max(f64::MIN_POSITIVE)
+    }
+
+    fn gradient(&self, k: &[f64]) -> Vec<f64> {
+        let s = 2.0 / (self.k_d_norm * self.k_d_norm).max(f64::MIN_POSITIVE);
+        let ak = self.gram.mul_vec(k);
+        ak.iter().zip(&self.rhs).map(|(a, b)| s * (a - b)).collect()
+    }
+
+    /// The trust-region method the paper used (its ref. [9]): each step minimizes the
+    /// quadratic model within a ball of radius Δ exactly (eigen-decomposition of the Hessian
+    /// and a bisection on the secular equation `‖(H + λI)⁻¹ g‖ = Δ`, Moré–Sorensen), with the
+    /// usual ratio test for Δ. With `nonnegative`, steps are taken on the variables not held
+    /// at their bound and projected onto `k ≥ 0` (a projected trust-region method).
+    pub fn trust_region(
+        &self,
+        start: &[f64],
+        nonnegative: bool,
+        max_iterations: usize,
+    ) -> Result<TrustRegionOutcome, DeriveError> {
+        let c = self.kinds.len();
+        let scale = 2.0 / (self.k_d_norm * self.k_d_norm).max(f64::MIN_POSITIVE);
+        let mut k: Vec<f64> = start.to_vec();
+        if nonnegative {
+            k.iter_mut().for_each(|x| *x = x.max(0.0));
+        }
+        let mut radius = 1.0f64.max(k.iter().map(|x| x.abs()).fold(0.0, f64::max));
+        let g0 = norm(&self.gradient(&k)).max(f64::MIN_POSITIVE);
+        let mut iterations = 0;
+        let mut gnorm = g0;
+        while iterations < max_iterations {
+            let g = self.gradient(&k);
+            // Variables free to move: not at the bound with the gradient pushing outward.
+            let free: Vec<usize> = (0..c)
+                .filter(|&i| !nonnegative || k[i] > 0.0 || g[i] < 0.0)
+                .collect();
+            let gf: Vec<f64> = free.iter().map(|&i| g[i]).collect();
+            gnorm = norm(&gf);
+            if gnorm <= 1e-13 * g0 || free.is_empty() {
+                break;
+            }
+            iterations += 1;
+            let hf = DenseMatrix::from_fn(free.len(), free.len(), |i, j| {
+                scale * self.gram[(free[i], free[j])]
+            });
+            let step = trust_region_step(&hf, &gf, radius)?;
+            let mut trial = k.clone();
+            for (i, &fi) in free.iter().enumerate() {
+                trial[fi] += step[i];
+                if nonnegative {
+                    trial[fi] = trial[fi].max(0.0);
+                }
+            }
+            let actual = self.objective(&k) - self.objective(&trial);
+            let s: Vec<f64> = free.iter().map(|&i| trial[i] - k[i]).collect();
+            let hs = hf.mul_vec(&s);
+            let predicted = -(dot(&gf, &s) + 0.5 * dot(&s, &hs));
+            let rho = if predicted > 0.0 {
+                actual / predicted
+            } else {
+                0.0
+            };
+            let snorm = norm(&s);
+            if rho < 0.25 {
+                radius = 0.25 * snorm.max(1e-300);
+            } else if rho > 0.75 && snorm >= 0.99 * radius {
+                radius *= 2.0;
+            }
+            if rho > 1e-4 || (actual >= 0.0 && snorm < 1e-15 * (1.0 + norm(&k))) {
+                k = trial;
+            }
+            if radius < 1e-300 {
+                break;
+            }
+        }
+        Ok(TrustRegionOutcome {
+            k,
+            iterations,
+            gradient_norm: gnorm,
+        })
+    }
+}
+
+impl StiffnessFit {
+    /// `‖Ωᵀ K_S(k) Ω − K_D‖₂ / ‖K_D‖₂` with the spectral norm (largest |eigenvalue| of the
+    /// symmetric residual), the other reading of the paper's `‖·‖₂²` in eq. (15).
+    pub fn relative_spectral_residual(&self, k: &[f64]) -> Result<f64, DeriveError> {
+        let diff = SparseMatrix::linear_combination(1.0, &self.model_matrix(k)?, -1.0, &self.k_d)?;
+        Ok(spectral_norm(&diff)? / spectral_norm(&self.k_d)?.max(f64::MIN_POSITIVE))
+    }
+
+    /// Minimizes the spectral-norm residual (convex but not smooth) by Nelder–Mead from the
+    /// Frobenius solution, restarted until it no longer improves. Returns `k` and the relative
+    /// spectral residual there.
+    pub fn solve_spectral(&self) -> Result<(Vec<f64>, f64), DeriveError> {
+        let start = self.solve(false)?;
+        let f = |k: &[f64]| self.relative_spectral_residual(k).unwrap_or(f64::INFINITY);
+        let mut best = start.clone();
+        let mut best_f = f(&best);
+        for _ in 0..6 {
+            let scale = best.iter().map(|x| x.abs()).fold(0.0, f64::max).max(1e-3);
+            let (k, fk) = nelder_mead(&f, &best, 0.25 * scale, 400);
+            if fk < best_f - 1e-12 * best_f.abs() {
+                best = k;
+                best_f = fk;
+            } else {
+                break;
+            }
+        }
+        Ok((best, best_f))
+    }
+}
+
+/// Largest |eigenvalue| of a symmetric sparse matrix (dense eigen-decomposition).
+fn spectral_norm(a: &SparseMatrix) -> Result<f64, DeriveError> {
+    let eig = symmetric_eigen(&a.to_dense())?;
+    Ok(eig.values.iter().map(|x| x.abs()).fold(0.0, f64::max))
+}
+
+/// Nelder–Mead simplex minimization (Lagarias et al. 1998 coefficients) from `x0` with an
+/// initial simplex of size `step`, at most `max_evals` evaluations.
+fn nelder_mead(
+    f: &dyn Fn(&[f64]) -> f64,
+    x0: &[f64],
+    step: f64,
+    max_evals: usize,
+) -> (Vec<f64>, f64) {
+    let n = x0.len();
+    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
+    simplex.push((x0.to_vec(), f(x0)));
+    for i in 0..n {
+        let mut x = x0.to_vec();
+        x[i] += step;
+        let fx = f(&x);
+        simplex.push((x, fx));
+    }
+    let mut evals = n + 1;
+    while evals < max_evals {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let (fb, fw) = (simplex[0].1, simplex[n].1);
+        let size = simplex
+            .iter()
+            .map(|(x, _)| {
+                x.iter()
+                    .zip(&simplex[0].0)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max);
+        if (fw - fb).abs() <= 1e-13 * fb.abs().max(1e-300)
+            && size <= 1e-10 * (1.0 + norm(&simplex[0].0))
+        {
+            break;
+        }
+        let centroid: Vec<f64> = (0..n)
+            .map(|j| simplex[..n].iter().map(|(x, _)| x[j]).sum::<f64>() / n as f64)
+            .collect();
+        let along = |t: f64| -> Vec<f64> {
+            centroid
+                .iter()
+                .zip(&simplex[n].0)
+                .map(|(c, w)| c + t * (c - w))
+                .collect()
+        };
+        let xr = along(1.0);
+        let fr = f(&xr);
+        evals += 1;
+        if fr < simplex[0].1 {
+            let xe = along(2.0);
+            let fe = f(&xe);
+            evals += 1;
+            simplex[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
+        } else if fr < simplex[n - 1].1 {
+            simplex[n] = (xr, fr);
+        } else {
+            let (xc, fc) = if fr < simplex[n].1 {
+                let x = along(0.5);
+                let fx = f(&x);
+                (x, fx)
+            } else {
+                let x = along(-0.5);
+                let fx = f(&x);
+                (x, fx)
+            };
+            evals += 1;
+            if fc < simplex[n].1.min(fr) {
+                simplex[n] = (xc, fc);
+            } else {
+                let best = simplex[0].0.clone();
+                for item in simplex.iter_mut().skip(1) {
+                    let x: Vec<f64> = item
+                        .0
+                        .iter()
+                        .zip(&best)
+                        .map(|(a, b)| b + 0.5 * (a - b))
+                        .collect();
+                    let fx = f(&x);
+                    *item = (x, fx);
+                }
+                evals += n;
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let (x, fx) = simplex.swap_remove(0);
+    (x, fx)
+}
+
+/// Exact minimizer of `gᵀs + ½ sᵀHs` subject to `‖s‖ ≤ Δ` for a small symmetric H
+/// (Moré & Sorensen 1983; Nocedal & Wright, Algorithm 4.3 in eigen-coordinates).
+fn trust_region_step(h: &DenseMatrix, g: &[f64], radius: f64) -> Result<Vec<f64>, DeriveError> {
+    let n = g.len();
+    let eig = symmetric_eigen(h)?;
+    // g in the eigenbasis.
+    let gt: Vec<f64> = (0..n)
+        .map(|i| (0..n).map(|r| eig.vectors[(r, i)] * g[r]).sum())
+        .collect();
+    let lam_min = eig.values[0];
+    let step_norm = |lam: f64| -> f64 {
+        gt.iter()
+            .zip(&eig.values)
+            .map(|(gi, ei)| (gi / (ei + lam)).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let lam = if lam_min > 0.0 && step_norm(0.0) <= radius {
+        0.0
+    } else {
+        // Bisection on ‖s(λ)‖ = Δ for λ > max(0, −λ_min).
+        let mut lo = (-lam_min).max(0.0);
+        let mut hi = lo + norm(g) / radius + eig.values[n - 1].abs() + 1.0;
+        while step_norm(hi) > radius {
+            hi *= 2.0;
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if step_norm(mid) > radius {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi
+    };
+    let st: Vec<f64> = gt
+        .iter()
+        .zip(&eig.values)
+        .map(|(gi, ei)| {
+            let d = ei + lam;
+            if d.abs() < 1e-300 { 0.0 } else { -gi / d }
+        })
+        .collect();
+    Ok((0..n)
+        .map(|r| (0..n).map(|i| eig.vectors[(r, i)] * st[i]).sum())
+        .collect())
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}

@@ -1,0 +1,159 @@
+//! Side-by-side validation of two trajectories (the paper's Figure 3): errors, amplitude and
+//! dominant periods.
+
+use serde::Serialize;
+
+/// Sampled positions of the probe points over time.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Trajectory {
+    /// Sample times.
+    pub t: Vec<f64>,
+    /// `probes[p][s]`: position of probe `p` at sample `s`.
+    pub probes: Vec<Vec<[f64; 3]>>,
+    /// `[kinetic, potential]` energy at each sample.
+    pub energy: Vec<[f64; 2]>,
+    /// Set when the run stopped early (diverged, unstable or cancelled), with the reason.
+    pub stopped: Option<String>,
+}
+
+impl Trajectory {
+    /// An empty trajectory for `n_probes` probes.
+    pub fn new(n_probes: usize) -> Self {
+        Self {
+            t: Vec::new(),
+            probes: vec![Vec::new(); n_probes],
+            energy: Vec::new(),
+            stopped: None,
+        }
+    }
+
+    /// Component `axis` (0 = x, 1 = y, 2 = z) of probe `p` over time.
+    pub fn component(&self, p: usize, axis: usize) -> Vec<f64> {
+        self.probes[p].iter().map(|x| x[axis]).collect()
+    }
+}
+
+/// Errors between a reference series and another, sampled at the same times.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Samples compared (the shorter series sets it).
+    pub samples: usize,
+    /// `√(mean (a − b)²)`.
+    pub rms: f64,
+    /// `max |a − b|`.
+    pub max_abs: f64,
+    /// Peak-to-peak amplitude of the reference about its initial value, `max |a − a₀|`.
+    pub reference_amplitude: f64,
+    /// `rms / reference_amplitude`.
+    pub relative_rms: f64,
+    /// Dominant period of the reference (mean spacing of its upward mean crossings).
+    pub reference_period: Option<f64>,
+    /// Dominant period of the other series.
+    pub other_period: Option<f64>,
+}
+
+/// Compares `other` against `reference` (same sample times `t`; the shorter length is used).
+/// Non-finite samples of `other` make every error infinite.
+pub fn compare(t: &[f64], reference: &[f64], other: &[f64]) -> Comparison {
+    let n = t.len().min(reference.len()).min(other.len());
+    let mut sum = 0.0;
+    let mut max_abs: f64 = 0.0;
+    for s in 0..n {
+        let d = reference[s] - other[s];
+        if !d.is_finite() {
+            sum = f64::INFINITY;
+            max_abs = f64::INFINITY;
+            break;
+        }
+        sum += d * d;
+        max_abs = max_abs.max(d.abs());
+    }
+    let rms = if n == 0 {
+        f64::NAN
+    } else {
+        (sum / n as f64).sqrt()
+    };
+    let a0 = reference.first().copied().unwrap_or(0.0);
+    let amplitude = reference[..n]
+        .iter()
+        .map(|a| (a - a0).abs())
+        .fold(0.0, f64::max);
+    Comparison {
+        samples: n,
+        rms,
+        max_abs,
+        reference_amplitude: amplitude,
+        relative_rms: if amplitude > 0.0 {
+            rms / amplitude
+        } else {
+            f64::NAN
+        },
+        reference_period: dominant_period(&t[..n], &reference[..n]),
+        other_period: dominant_period(&t[..n], &other[..n]),
+    }
+}
+
+/// Dominant period of a sampled signal: the mean spacing between its upward crossings of its
+/// mean value (linear interpolation between samples). None with fewer than two crossings.
+///
+/// ```
+/// let t: Vec<f64> = (0..2000).map(|i| i as f64 * 0.01).collect();
+/// let z: Vec<f64> = t.iter().map(|t| (2.0 * std::f64::consts::PI * t / 1.7).sin()).collect();
+/// let p = nurbspring_derive::dominant_period(&t, &z).unwrap();
+/// assert!((p - 1.7).abs() < 1e-3);
+/// ```
+pub fn dominant_period(t: &[f64], z: &[f64]) -> Option<f64> {
+    let n = t.len().min(z.len());
+    if n < 3 || z[..n].iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    let mean = z[..n].iter().sum::<f64>() / n as f64;
+    let spread = z[..n].iter().map(|x| (x - mean).abs()).fold(0.0, f64::max);
+    if spread <= 1e-14 * mean.abs().max(1.0) {
+        return None;
+    }
+    let mut crossings = Vec::new();
+    for s in 1..n {
+        let (a, b) = (z[s - 1] - mean, z[s] - mean);
+        if a < 0.0 && b >= 0.0 {
+            let f = a / (a - b);
+            crossings.push(t[s - 1] + f * (t[s] - t[s - 1]));
+        }
+    }
+    if crossings.len() < 2 {
+        return None;
+    }
+    Some((crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identical_series_have_zero_error() {
+        let t: Vec<f64> = (0..100).map(|i| i as f64 * 0.1).collect();
+        let z: Vec<f64> = t.iter().map(|t| t.sin()).collect();
+        let c = compare(&t, &z, &z);
+        assert_eq!(c.rms, 0.0);
+        assert_eq!(c.max_abs, 0.0);
+        assert!(c.reference_amplitude > 0.9);
+    }
+
+    #[test]
+    fn constant_offset_gives_that_rms() {
+        let t: Vec<f64> = (0..100).map(|i| i as f64 * 0.1).collect();
+        let a: Vec<f64> = t.iter().map(|t| t.sin()).collect();
+        let b: Vec<f64> = a.iter().map(|x| x + 0.25).collect();
+        let c = compare(&t, &a, &b);
+        assert!((c.rms - 0.25).abs() < 1e-15);
+        assert!((c.max_abs - 0.25).abs() < 1e-15);
+    }
+
+    #[test]
+    fn non_finite_is_infinite_error() {
+        let t = [0.0, 1.0, 2.0];
+        let c = compare(&t, &[0.0, 1.0, 0.0], &[0.0, f64::NAN, 0.0]);
+        assert!(c.rms.is_infinite());
+    }
+}

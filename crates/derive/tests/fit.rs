@@ -1,0 +1,235 @@
+//! The stiffness fit on problems whose answer is known.
+
+use nurbspring_derive::{DeriveError, StiffnessFit, omega_matrix};
+use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_linalg::SparseMatrix;
+use nurbspring_msm::{LatticeOptions, ParameterGrid, SpringKind, SpringLattice};
+
+/// The paper's surface (SPEC §7), slightly curved so that every class has out-of-plane terms.
+fn surface(curved: bool) -> NurbsSurface {
+    let ku = KnotVector::try_new(vec![0., 0., 0., 0., 0.25, 0.5, 0.75, 1., 1., 1., 1.], 3).unwrap();
+    let kv = KnotVector::try_new(vec![0., 0., 0., 0., 0.5, 1., 1., 1., 1.], 3).unwrap();
+    let px = [0., 0.25, 0.75, 1.52, 2.5, 2.75, 3.];
+    let py = [0., 0.83, 2.5, 4.16, 5.];
+    let mut pts = Vec::new();
+    for (i, &x) in px.iter().enumerate() {
+        for (j, &y) in py.iter().enumerate() {
+            let z = if curved {
+                2.0 + 0.1 * (i as f64) * (j as f64)
+            } else {
+                2.0
+            };
+            pts.push([x, y, z]);
+        }
+    }
+    NurbsSurface::try_new(ku, kv, pts, vec![1.0; 35]).unwrap()
+}
+
+fn lattice(s: &NurbsSurface, bending: bool, k: [f64; 3], grid: ParameterGrid) -> SpringLattice {
+    let options = LatticeOptions {
+        grid,
+        structural: true,
+        shear: true,
+        bending,
+        k_edge: k[0],
+        k_diag: k[1],
+        k_bend: k[2],
+        ..LatticeOptions::default()
+    };
+    SpringLattice::from_surface(s, &options, &[]).unwrap()
+}
+
+fn setup(lat: &SpringLattice, s: &NurbsSurface) -> (SparseMatrix, Vec<(SpringKind, SparseMatrix)>) {
+    let omega = omega_matrix(s, lat.params.as_ref().unwrap(), false).unwrap();
+    let x0 = lat.flat_positions();
+    let unit = lat
+        .kinds_present()
+        .into_iter()
+        .map(|c| (c, lat.unit_stiffness(c, &x0)))
+        .collect();
+    (omega, unit)
+}
+
+fn synthetic_k_d(lat: &SpringLattice, omega: &SparseMatrix) -> SparseMatrix {
+    let ks = lat.tangent_stiffness(&lat.flat_positions());
+    omega
+        .transpose()
+        .matmul(&ks.matmul(omega).unwrap())
+        .unwrap()
+}
+
+/// K_D := Ωᵀ K_S Ω with known k: the closed form recovers k to round-off, the residual
+/// vanishes, and the trust region lands on the same answer.
+#[test]
+fn recovers_known_constants() {
+    for (curved, bending, grid) in [
+        (false, false, ParameterGrid::Knots),
+        (true, false, ParameterGrid::Knots),
+        (
+            true,
+            true,
+            ParameterGrid::Uniform {
+                nodes_u: 7,
+                nodes_v: 6,
+            },
+        ),
+    ] {
+        let s = surface(curved);
+        let truth = [2.5, 0.75, 0.3];
+        let lat = lattice(&s, bending, truth, grid.clone());
+        let (omega, unit) = setup(&lat, &s);
+        let k_d = synthetic_k_d(&lat, &omega);
+        let fit = StiffnessFit::new(&k_d, &omega, &unit, lat.springs.len(), None).unwrap();
+        let k = fit.solve(false).unwrap();
+        for (i, c) in fit.kinds().iter().enumerate() {
+            let expected = match c {
+                SpringKind::Structural => truth[0],
+                SpringKind::Shear => truth[1],
+                SpringKind::Bend => truth[2],
+            };
+            assert!(
+                (k[i] - expected).abs() < 1e-11 * expected,
+                "{c:?}: {} vs {expected} (curved {curved}, bending {bending})",
+                k[i]
+            );
+        }
+        assert!(fit.relative_residual(&k).unwrap() < 1e-13);
+        let tr = fit.trust_region(&vec![1.0; k.len()], false, 200).unwrap();
+        for i in 0..k.len() {
+            assert!(
+                (tr.k[i] - k[i]).abs() < 1e-9 * k[i].abs(),
+                "{:?} vs {:?}",
+                tr.k,
+                k
+            );
+        }
+        // Free-dof reading: a subset of the same matrices, same answer.
+        let free: Vec<usize> = (0..k_d.nrows()).filter(|d| d % 7 != 0).collect();
+        let fit_free =
+            StiffnessFit::new(&k_d, &omega, &unit, lat.springs.len(), Some(&free)).unwrap();
+        let k_free = fit_free.solve(false).unwrap();
+        for i in 0..k.len() {
+            assert!((k_free[i] - k[i]).abs() < 1e-10 * k[i].abs());
+        }
+    }
+}
+
+/// A target that wants a negative constant: the k ≥ 0 solution holds it at zero, satisfies
+/// the KKT conditions, and the projected trust region agrees.
+#[test]
+fn nonnegative_fit_satisfies_kkt() {
+    let s = surface(true);
+    let lat = lattice(&s, false, [1.0, 1.0, 0.0], ParameterGrid::Knots);
+    let (omega, unit) = setup(&lat, &s);
+    // K_S = 2 G_structural − 0.8 G_shear: no lattice can have it, the unconstrained fit finds it.
+    let k_s = SparseMatrix::linear_combination(2.0, &unit[0].1, -0.8, &unit[1].1).unwrap();
+    let k_d = omega
+        .transpose()
+        .matmul(&k_s.matmul(&omega).unwrap())
+        .unwrap();
+    let fit = StiffnessFit::new(&k_d, &omega, &unit, lat.springs.len(), None).unwrap();
+    let free = fit.solve(false).unwrap();
+    assert!(free.iter().any(|&x| x < 0.0), "{free:?}");
+    let k = fit.solve(true).unwrap();
+    assert!(k.iter().all(|&x| x >= 0.0));
+    // KKT: gradient A k − b is zero on the positive entries and ≥ 0 on the zero ones.
+    let ak = fit.gram().mul_vec(&k);
+    let scale = fit.rhs().iter().map(|x| x.abs()).fold(0.0, f64::max);
+    for i in 0..k.len() {
+        let g = ak[i] - fit.rhs()[i];
+        if k[i] > 0.0 {
+            assert!(g.abs() < 1e-12 * scale, "stationarity {g}");
+        } else {
+            assert!(g > -1e-12 * scale, "dual feasibility {g}");
+        }
+    }
+    let tr = fit.trust_region(&[1.0, 1.0], true, 500).unwrap();
+    for i in 0..k.len() {
+        assert!(
+            (tr.k[i] - k[i]).abs() < 1e-8 * (1.0 + k[i].abs()),
+            "{:?} vs {k:?}",
+            tr.k
+        );
+    }
+}
+
+/// Classes that cannot be told apart give a singular fit naming them.
+#[test]
+fn dependent_classes_are_named() {
+    let g =
+        SparseMatrix::from_triplets(3, 3, &[(0, 0, 1.0), (1, 1, 2.0), (0, 1, 0.5), (1, 0, 0.5)])
+            .unwrap();
+    let mut g2 = g.clone();
+    g2.scale(3.0);
+    let k_d = SparseMatrix::identity(3);
+    let omega = SparseMatrix::identity(3);
+    let err = StiffnessFit::new(
+        &k_d,
+        &omega,
+        &[(SpringKind::Structural, g), (SpringKind::Shear, g2)],
+        10,
+        None,
+    )
+    .unwrap_err();
+    match err {
+        DeriveError::SingularFit { detail } => {
+            assert!(
+                detail.contains("structural") && detail.contains("shear"),
+                "{detail}"
+            );
+        }
+        other => panic!("unexpected {other}"),
+    }
+    let zero = SparseMatrix::zeros(3, 3);
+    let err = StiffnessFit::new(&k_d, &omega, &[(SpringKind::Bend, zero)], 10, None).unwrap_err();
+    assert!(err.to_string().contains("bend"), "{err}");
+}
+
+#[test]
+fn too_few_springs_is_an_error() {
+    let g = SparseMatrix::identity(3);
+    let err = StiffnessFit::new(
+        &g,
+        &g,
+        &[
+            (SpringKind::Structural, g.clone()),
+            (SpringKind::Shear, g.clone()),
+        ],
+        1,
+        None,
+    )
+    .unwrap_err();
+    assert!(matches!(
+        err,
+        DeriveError::TooFewSprings {
+            classes: 2,
+            springs: 1
+        }
+    ));
+}
+
+#[test]
+fn node_outside_domain_is_an_error() {
+    let s = surface(false);
+    let err = omega_matrix(&s, &[(0.5, 0.5), (1.5, 0.2)], false).unwrap_err();
+    assert!(
+        matches!(err, DeriveError::NodeOutsideDomain { node: 1, .. }),
+        "{err}"
+    );
+}
+
+/// Ω p(0) = x(0) (eq. 11) on the lattice nodes.
+#[test]
+fn omega_maps_control_points_to_nodes() {
+    let s = surface(true);
+    let lat = lattice(&s, false, [1.0, 1.0, 0.0], ParameterGrid::Greville);
+    let omega = omega_matrix(&s, lat.params.as_ref().unwrap(), false).unwrap();
+    let p: Vec<f64> = s.control_points().iter().flatten().copied().collect();
+    let mut x = vec![0.0; omega.nrows()];
+    omega.mul_vec(&p, &mut x);
+    for (a, node) in lat.positions.iter().enumerate() {
+        for c in 0..3 {
+            assert!((x[3 * a + c] - node[c]).abs() < 1e-14 * (1.0 + node[c].abs()));
+        }
+    }
+}

@@ -1,0 +1,78 @@
+//! Assembly of M and K (β11 = β22 = 1) for a bicubic patch of 128 × 128 elements
+//! (131 × 131 = 17,161 control points, 51,483 dofs), and one Terzopoulos–Qin step after the
+//! factorization. Run: `cargo bench -p nurbspring-dnurbs -- --quick`.
+
+// `criterion_group!` generates an undocumented public function.
+#![allow(missing_docs)]
+
+use std::time::Duration;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use nurbspring_dnurbs::{
+    Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material, assemble, assemble_scalar,
+};
+use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_sim::{IntegratorKind, make_stepper};
+
+const ELEMENTS: usize = 128;
+
+fn patch() -> NurbsSurface {
+    let k = KnotVector::clamped_uniform(3, ELEMENTS).unwrap();
+    let g = k.greville();
+    let pts: Vec<[f64; 3]> = g
+        .iter()
+        .flat_map(|&u| {
+            g.iter()
+                .map(move |&v| [u, v, 0.1 * (3.0 * u).sin() * (2.0 * v).cos()])
+        })
+        .collect();
+    let n = pts.len();
+    NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; n]).unwrap()
+}
+
+fn material() -> Material {
+    Material {
+        mu: 1.0,
+        beta11: 1.0,
+        beta22: 1.0,
+        ..Material::default()
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    let geometry = Geometry::Surface(patch());
+    assert_eq!(geometry.n_control_points(), 131 * 131);
+    let options = DnurbsOptions::default();
+    let mut group = c.benchmark_group("dnurbs_128x128_bicubic");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(10));
+    group.bench_function("assemble_scalar (S_M, S_K, N x N)", |b| {
+        b.iter(|| assemble_scalar(&geometry, &material(), &options).unwrap())
+    });
+    group.bench_function("assemble (M, D, K, f on 3N dofs)", |b| {
+        b.iter(|| assemble(&geometry, &material(), &Loads::default(), &options).unwrap())
+    });
+    let constraints = Constraints {
+        fixed_rings: 1,
+        ..Constraints::default()
+    };
+    let model = DnurbsModel::new(
+        geometry.clone(),
+        material(),
+        Loads::default(),
+        &constraints,
+        options.clone(),
+    )
+    .unwrap();
+    let dt = 0.01;
+    let mut state = model.initial_state(&[[0.0, 0.0, -0.2]], 0.0);
+    let mut stepper = make_stepper(IntegratorKind::TerzopoulosQin, &model, &state, dt).unwrap();
+    group.bench_function("terzopoulos-qin step (factored)", |b| {
+        b.iter(|| stepper.step(&model, &mut state, dt).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(dnurbs, benches);
+criterion_main!(dnurbs);

@@ -1,0 +1,343 @@
+//! Constraints (SPEC §4): fixed control points (by index and by outer rings), fixed weights,
+//! and general linear constraints `A p = b` removed by the substitution `p = G q + g`.
+//!
+//! Internally every constrained model works on reduced coordinates `q` with
+//! `p(q) = P q + o`: `P = E_f G` places the free dofs (`E_f`, from a [`DofMap`]: fixed dofs
+//! removed, free first) through the null-space basis `G` of the linear constraints (identity
+//! without them), and the offset `o` holds the fixed values and the particular solution `g`.
+//! A matrix `A` becomes `Pᵀ A P`, a force `f` becomes `Pᵀ f`, and the coupling to the fixed
+//! dofs moves to the right-hand side as `Pᵀ A o` (SPEC §4).
+
+use nurbspring_linalg::{DenseMatrix, LinalgError, SparseMatrix, affine_solution_space};
+use nurbspring_sim::DofMap;
+
+use crate::{DnurbsError, Geometry, outer_ring_points};
+
+/// One row of `A p = b`: `(global dof index, coefficient)` pairs and the right-hand side.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearConstraint {
+    /// `(dof, coefficient)` pairs; a dof may appear more than once (coefficients add).
+    pub terms: Vec<(usize, f64)>,
+    /// The right-hand side b.
+    pub rhs: f64,
+}
+
+/// Which generalized coordinates are constrained (SPEC §4).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Constraints {
+    /// Control points whose x, y, z are fixed at their initial values.
+    pub fixed_points: Vec<usize>,
+    /// Fix the control points of this many outer rings of the net (curves: end points).
+    pub fixed_rings: usize,
+    /// With weights as unknowns: keep every weight at its initial value.
+    pub fixed_weights: bool,
+    /// General linear constraints `A p = b` on the full generalized coordinates.
+    pub linear: Vec<LinearConstraint>,
+}
+
+/// The null-space substitution of the linear constraints on the free dofs.
+#[derive(Clone, Debug)]
+pub(crate) struct Affine {
+    /// `G`, `n_free × n_q`.
+    pub(crate) basis: SparseMatrix,
+    /// `Gᵀ`.
+    pub(crate) basis_t: SparseMatrix,
+    /// The particular solution `g` on the free dofs.
+    pub(crate) particular: Vec<f64>,
+}
+
+/// Reduced coordinates `q` with `p = P q + o` (see the module docs).
+#[derive(Clone, Debug)]
+pub(crate) struct Reduction {
+    pub(crate) dof_map: DofMap,
+    pub(crate) affine: Option<Affine>,
+    /// `o = p(0)` in the reduced sense: fixed values on fixed dofs, `g` (or 0) on free ones.
+    pub(crate) offset: Vec<f64>,
+    /// Number of reduced coordinates.
+    pub(crate) n_q: usize,
+    /// Control points with all of x, y, z fixed, ascending.
+    pub(crate) fixed_points: Vec<usize>,
+    /// The weight dof pinned to remove the scaling gauge of homogeneous weights, if any.
+    pub(crate) gauge_weight: Option<usize>,
+}
+
+impl Reduction {
+    /// Resolves `constraints` for `geometry` with initial coordinates `p0` (SPEC §4).
+    ///
+    /// With weights as unknowns and no weight fixed (by `fixed_weights` or a linear constraint
+    /// on a weight), scaling every weight by the same factor leaves the surface unchanged, so
+    /// `M` and `K` are singular along that direction. The weight of the first fixed control
+    /// point (or of point 0) is then pinned at its initial value: a gauge choice that leaves
+    /// the motion of the surface unchanged and makes every system solved SPD.
+    pub(crate) fn new(
+        geometry: &Geometry,
+        constraints: &Constraints,
+        weights_as_dofs: bool,
+        p0: &[f64],
+    ) -> Result<Self, DnurbsError> {
+        let n = geometry.n_control_points();
+        let m = geometry.dofs_per_point(weights_as_dofs);
+        let n_total = n * m;
+        let mut is_fixed_point = vec![false; n];
+        for &k in &constraints.fixed_points {
+            if k >= n {
+                return Err(DnurbsError::MissingControlPoint { index: k, count: n });
+            }
+            is_fixed_point[k] = true;
+        }
+        let (n_u, n_v) = geometry.net_shape();
+        for k in outer_ring_points(n_u, n_v, constraints.fixed_rings) {
+            is_fixed_point[k] = true;
+        }
+        let fixed_points: Vec<usize> = (0..n).filter(|&k| is_fixed_point[k]).collect();
+        let mut fixed: Vec<usize> = fixed_points
+            .iter()
+            .flat_map(|&k| (0..3).map(move |x| k * m + x))
+            .collect();
+        for (r, c) in constraints.linear.iter().enumerate() {
+            if !c.rhs.is_finite() {
+                return Err(DnurbsError::InvalidConstraint {
+                    detail: format!(
+                        "linear constraint {r} has a non-finite right-hand side {}",
+                        c.rhs
+                    ),
+                });
+            }
+            for &(dof, coef) in &c.terms {
+                if dof >= n_total {
+                    return Err(DnurbsError::InvalidConstraint {
+                        detail: format!(
+                            "linear constraint {r} names dof {dof}, but there are {n_total} dofs \
+                             ({n} control points × {m})"
+                        ),
+                    });
+                }
+                if !coef.is_finite() {
+                    return Err(DnurbsError::InvalidConstraint {
+                        detail: format!(
+                            "linear constraint {r} has a non-finite coefficient {coef} on dof {dof}"
+                        ),
+                    });
+                }
+            }
+        }
+        let mut gauge_weight = None;
+        if m == 4 {
+            if constraints.fixed_weights {
+                fixed.extend((0..n).map(|k| 4 * k + 3));
+            } else {
+                let weight_constrained = constraints
+                    .linear
+                    .iter()
+                    .any(|c| c.terms.iter().any(|&(d, coef)| d % 4 == 3 && coef != 0.0));
+                if !weight_constrained {
+                    let k = fixed_points.first().copied().unwrap_or(0);
+                    gauge_weight = Some(4 * k + 3);
+                    fixed.push(4 * k + 3);
+                }
+            }
+        }
+        let dof_map = DofMap::new(n_total, &fixed)?;
+        let n_free = dof_map.n_free();
+        let mut offset = vec![0.0; n_total];
+        for &d in dof_map.fixed() {
+            offset[d] = p0[d];
+        }
+        let mut affine = None;
+        let mut n_q = n_free;
+        if !constraints.linear.is_empty() {
+            let a = build_affine(&dof_map, &constraints.linear, p0)?;
+            if let Some(a) = a {
+                for (i, &g) in a.particular.iter().enumerate() {
+                    offset[dof_map.free()[i]] = g;
+                }
+                n_q = a.basis.ncols();
+                affine = Some(a);
+            }
+        }
+        Ok(Self {
+            dof_map,
+            affine,
+            offset,
+            n_q,
+            fixed_points,
+            gauge_weight,
+        })
+    }
+
+    /// `p = P q + o`.
+    pub(crate) fn to_full(&self, q: &[f64]) -> Vec<f64> {
+        let mut p = self.offset.clone();
+        self.add_embedded(q, &mut p);
+        p
+    }
+
+    /// `out += P x`.
+    pub(crate) fn add_embedded(&self, x: &[f64], out: &mut [f64]) {
+        match &self.affine {
+            None => {
+                for (i, &d) in self.dof_map.free().iter().enumerate() {
+                    out[d] += x[i];
+                }
+            }
+            Some(a) => {
+                let mut y = vec![0.0; self.dof_map.n_free()];
+                a.basis.mul_vec(x, &mut y);
+                for (i, &d) in self.dof_map.free().iter().enumerate() {
+                    out[d] += y[i];
+                }
+            }
+        }
+    }
+
+    /// `P x` (a velocity: zero on fixed dofs).
+    pub(crate) fn embed(&self, x: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; self.dof_map.n_total()];
+        self.add_embedded(x, &mut out);
+        out
+    }
+
+    /// `Pᵀ f` (a force, or the projection of a velocity since `G` is orthonormal).
+    pub(crate) fn reduce_vector(&self, f: &[f64]) -> Vec<f64> {
+        let ff = self.dof_map.restrict(f);
+        match &self.affine {
+            None => ff,
+            Some(a) => {
+                let mut out = vec![0.0; self.n_q];
+                a.basis_t.mul_vec(&ff, &mut out);
+                out
+            }
+        }
+    }
+
+    /// Reduced coordinates of a full `p`: `q = Gᵀ (p_f − g)` (exact when `p` satisfies the
+    /// constraints, the orthogonal projection otherwise).
+    pub(crate) fn reduce_coordinates(&self, p: &[f64]) -> Vec<f64> {
+        let diff: Vec<f64> = p.iter().zip(&self.offset).map(|(a, b)| a - b).collect();
+        self.reduce_vector(&diff)
+    }
+
+    /// `Pᵀ A P`.
+    pub(crate) fn reduce_matrix(&self, a: &SparseMatrix) -> Result<SparseMatrix, DnurbsError> {
+        let aff = self.dof_map.restrict_matrix(a);
+        match &self.affine {
+            None => Ok(aff),
+            Some(af) => Ok(af.basis_t.matmul(&aff.matmul(&af.basis)?)?),
+        }
+    }
+}
+
+/// Linear constraints on the free dofs: `A_f p_f = b − A_c p_c`, solved as `p_f = G q + g`
+/// (SPEC §4). Only the free dofs that appear in a constraint are substituted (`G` is the
+/// identity elsewhere), so the reduced matrices stay sparse. `None` when no constraint touches
+/// a free dof.
+fn build_affine(
+    dof_map: &DofMap,
+    linear: &[LinearConstraint],
+    p0: &[f64],
+) -> Result<Option<Affine>, DnurbsError> {
+    let n_free = dof_map.n_free();
+    // Free part of every row, the fixed part moved to the right-hand side.
+    let mut touched: Vec<usize> = Vec::new();
+    let mut rows: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
+    for (r, c) in linear.iter().enumerate() {
+        let mut free_terms: Vec<(usize, f64)> = Vec::new();
+        let mut rhs = c.rhs;
+        let mut scale = c.rhs.abs();
+        for &(dof, coef) in &c.terms {
+            match dof_map.free_index(dof) {
+                Some(i) => free_terms.push((i, coef)),
+                None => {
+                    rhs -= coef * p0[dof];
+                    scale += (coef * p0[dof]).abs();
+                }
+            }
+        }
+        free_terms.retain(|&(_, coef)| coef != 0.0);
+        if free_terms.is_empty() {
+            if rhs.abs() > 1e-10 * scale.max(1.0) {
+                return Err(DnurbsError::InvalidConstraint {
+                    detail: format!(
+                        "linear constraint {r} involves only fixed dofs and is violated by \
+                         {rhs:e} (b = {}): it conflicts with the fixed control points",
+                        c.rhs
+                    ),
+                });
+            }
+            continue;
+        }
+        touched.extend(free_terms.iter().map(|&(i, _)| i));
+        rows.push((free_terms, rhs));
+    }
+    if rows.is_empty() {
+        return Ok(None);
+    }
+    touched.sort_unstable();
+    touched.dedup();
+    let mut local = vec![usize::MAX; n_free];
+    for (t, &i) in touched.iter().enumerate() {
+        local[i] = t;
+    }
+    let mut a = DenseMatrix::zeros(rows.len(), touched.len());
+    let mut b = vec![0.0; rows.len()];
+    for (r, (terms, rhs)) in rows.iter().enumerate() {
+        for &(i, coef) in terms {
+            a[(r, local[i])] += coef;
+        }
+        b[r] = *rhs;
+    }
+    let (g_t, particular_t) = affine_solution_space(&a, &b, 1e-12).map_err(|e| match e {
+        LinalgError::Singular { detail } => DnurbsError::InvalidConstraint {
+            detail: format!(
+                "the {} linear constraints on the free dofs are inconsistent: {detail}",
+                rows.len()
+            ),
+        },
+        other => DnurbsError::Linalg(other),
+    })?;
+    // A consistent system is solved exactly by the particular solution.
+    let ag = a.mul_vec(&particular_t);
+    let b_norm = b.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let residual = ag
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt();
+    if residual.is_nan() || residual > 1e-9 * b_norm.max(1.0) {
+        return Err(DnurbsError::InvalidConstraint {
+            detail: format!(
+                "the {} linear constraints are inconsistent: ‖A g − b‖ = {residual:e} (‖b‖ = {b_norm:e})",
+                rows.len()
+            ),
+        });
+    }
+    // G: identity columns for untouched free dofs, then the null-space basis of the touched ones.
+    let mut triplets = Vec::new();
+    let mut col = 0;
+    for i in 0..n_free {
+        if local[i] == usize::MAX {
+            triplets.push((i, col, 1.0));
+            col += 1;
+        }
+    }
+    for j in 0..g_t.ncols() {
+        for (t, &i) in touched.iter().enumerate() {
+            let v = g_t[(t, j)];
+            if v != 0.0 {
+                triplets.push((i, col, v));
+            }
+        }
+        col += 1;
+    }
+    let basis = SparseMatrix::from_triplets(n_free, col, &triplets)?;
+    let mut particular = vec![0.0; n_free];
+    for (t, &i) in touched.iter().enumerate() {
+        particular[i] = particular_t[t];
+    }
+    Ok(Some(Affine {
+        basis_t: basis.transpose(),
+        basis,
+        particular,
+    }))
+}

@@ -1,0 +1,68 @@
+//! External loads (SPEC §3): gravity as a force density `μ g`, a constant distributed force
+//! density, and point loads `J(u0, v0)ᵀ F`.
+
+use crate::{DnurbsError, Geometry};
+
+/// A concentrated force `F` at the surface point `c(u, v)`: generalized force `J(u, v)ᵀ F`
+/// (SPEC §3). For curves `v` is ignored.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointLoad {
+    /// Parameter u.
+    pub u: f64,
+    /// Parameter v (ignored for curves).
+    pub v: f64,
+    /// The force vector.
+    pub force: [f64; 3],
+}
+
+/// All external loads; they are constant in time.
+///
+/// The distributed force density is `f(u, v) = μ g + distributed`, integrated as
+/// `f_p = ∫∫ Jᵀ f du dv` (or over the area, see `Integration`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Loads {
+    /// Gravitational acceleration `g`; the force density is `μ g`.
+    pub gravity: [f64; 3],
+    /// A constant force density per unit parameter area (or surface area).
+    pub distributed: [f64; 3],
+    /// Point loads.
+    pub point: Vec<PointLoad>,
+}
+
+impl Loads {
+    /// True when there is no load at all.
+    pub fn is_zero(&self) -> bool {
+        self.gravity == [0.0; 3]
+            && self.distributed == [0.0; 3]
+            && self.point.iter().all(|p| p.force == [0.0; 3])
+    }
+
+    /// The constant force density `μ g + distributed` (SPEC §3).
+    pub fn density(&self, mu: f64) -> [f64; 3] {
+        std::array::from_fn(|x| mu * self.gravity[x] + self.distributed[x])
+    }
+
+    /// Checks that every value is finite and every point load lies in the parameter domain.
+    pub fn validate(&self, geometry: &Geometry) -> Result<(), DnurbsError> {
+        for (name, v) in [("gravity", self.gravity), ("distributed", self.distributed)] {
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(DnurbsError::InvalidLoad {
+                    detail: format!("{name} = {v:?} is not finite"),
+                });
+            }
+        }
+        for (i, p) in self.point.iter().enumerate() {
+            if p.force.iter().any(|x| !x.is_finite()) {
+                return Err(DnurbsError::InvalidLoad {
+                    detail: format!("point load {i} has a non-finite force {:?}", p.force),
+                });
+            }
+            if let Err(e) = geometry.check_parameters(p.u, p.v) {
+                return Err(DnurbsError::InvalidLoad {
+                    detail: format!("point load {i} at (u, v) = ({}, {}): {e}", p.u, p.v),
+                });
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,446 @@
+//! The constrained D-NURBS model (SPEC §3–4) as a [`DynamicModel`] on the reduced (free)
+//! coordinates, with its steady state (paper eq. (8)) and modes.
+//!
+//! Sign convention of `nurbspring-sim`: `M q̈ + D q̇ + f_int(q) = f_ext(t)` on the free dofs,
+//! with `f_int(q) = K_ff q + K_fc p_fixed − (K p_rest)_f` (a stiffness sign) and
+//! `f_ext = f_f`; with linear constraints `p = G q + g` everything is projected by `Gᵀ`.
+//! With constant weights the matrices are constant and `linear_stiffness` is `Some(K_ff)`, so
+//! every integrator of `nurbspring-sim` applies. With weights as unknowns the matrices are
+//! frozen at `p(0)` here (a linearization); the nonlinear motion is [`crate::RationalStepper`]'s.
+
+use nurbspring_linalg::{
+    DenseMatrix, LinalgError, SparseMatrix, SpdSolver, generalized_eigen_sparse_lowest,
+    generalized_symmetric_eigen,
+};
+use nurbspring_sim::{DofMap, DynamicModel, State, SystemMatrix};
+
+use crate::constraints::Reduction;
+use crate::{
+    Constraints, DnurbsError, DnurbsOptions, Geometry, Loads, Material, Matrices, RestShape,
+    assemble,
+};
+
+/// Largest reduced system for which [`DnurbsModel::modes`] uses the dense generalized
+/// eigensolver; above it, sparse shift-invert Lanczos.
+pub const DENSE_MODES_LIMIT: usize = 2000;
+
+/// Eigenpairs of `K φ = ω² M φ` on the free dofs (SPEC §3), ascending.
+#[derive(Clone, Debug)]
+pub struct Modes {
+    /// Angular frequencies ω (rad/s), `√max(λ, 0)`.
+    pub omega: Vec<f64>,
+    /// Mode shapes on the free (reduced) dofs, one column per mode, M-orthonormal.
+    pub vectors: DenseMatrix,
+}
+
+impl Modes {
+    /// Periods `2π/ω` (infinite for rigid modes).
+    pub fn periods(&self) -> Vec<f64> {
+        self.omega
+            .iter()
+            .map(|&w| {
+                if w > 0.0 {
+                    2.0 * std::f64::consts::PI / w
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .collect()
+    }
+}
+
+/// A D-NURBS surface or curve with material, loads and constraints, reduced to its free dofs
+/// (SPEC §3–4). Implements [`DynamicModel`].
+#[derive(Clone, Debug)]
+pub struct DnurbsModel {
+    pub(crate) geometry: Geometry,
+    pub(crate) material: Material,
+    pub(crate) loads: Loads,
+    pub(crate) options: DnurbsOptions,
+    pub(crate) matrices: Matrices,
+    pub(crate) reduction: Reduction,
+    pub(crate) p0: Vec<f64>,
+    pub(crate) p_rest: Vec<f64>,
+    mass_r: SystemMatrix,
+    damping_r: Option<SystemMatrix>,
+    stiffness_r: SparseMatrix,
+    /// `Pᵀ K (o − p_rest)`: `f_int(0)`.
+    f_int0: Vec<f64>,
+    /// `Pᵀ f`.
+    f_ext: Vec<f64>,
+}
+
+impl DnurbsModel {
+    /// Assembles the matrices at `geometry` (paper eqs. (3)–(4)), resolves the constraints
+    /// (SPEC §4) and reduces everything to the free dofs.
+    pub fn new(
+        geometry: Geometry,
+        material: Material,
+        loads: Loads,
+        constraints: &Constraints,
+        options: DnurbsOptions,
+    ) -> Result<Self, DnurbsError> {
+        material.validate()?;
+        loads.validate(&geometry)?;
+        let wad = options.weights_as_dofs;
+        let p0 = geometry.coordinates(wad);
+        let reduction = Reduction::new(&geometry, constraints, wad, &p0)?;
+        let matrices = assemble(&geometry, &material, &loads, &options)?;
+        let p_rest = match options.rest_shape {
+            RestShape::Initial => p0.clone(),
+            RestShape::Zero => vec![0.0; p0.len()],
+        };
+        let stiffness_r = reduction.reduce_matrix(&matrices.stiffness)?;
+        let mass_r = SystemMatrix::Sparse(reduction.reduce_matrix(&matrices.mass)?);
+        let damping_r = if material.gamma > 0.0 {
+            Some(SystemMatrix::Sparse(
+                reduction.reduce_matrix(&matrices.damping)?,
+            ))
+        } else {
+            None
+        };
+        let diff: Vec<f64> = reduction
+            .offset
+            .iter()
+            .zip(&p_rest)
+            .map(|(o, r)| o - r)
+            .collect();
+        let mut k_diff = vec![0.0; diff.len()];
+        matrices.stiffness.mul_vec(&diff, &mut k_diff);
+        let f_int0 = reduction.reduce_vector(&k_diff);
+        let f_ext = reduction.reduce_vector(&matrices.force);
+        Ok(Self {
+            geometry,
+            material,
+            loads,
+            options,
+            matrices,
+            reduction,
+            p0,
+            p_rest,
+            mass_r,
+            damping_r,
+            stiffness_r,
+            f_int0,
+            f_ext,
+        })
+    }
+
+    /// The geometry at `t = 0`.
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    /// The material.
+    pub fn material(&self) -> &Material {
+        &self.material
+    }
+
+    /// The loads.
+    pub fn loads(&self) -> &Loads {
+        &self.loads
+    }
+
+    /// The options.
+    pub fn options(&self) -> &DnurbsOptions {
+        &self.options
+    }
+
+    /// The full, unconstrained matrices at `p(0)`.
+    pub fn matrices(&self) -> &Matrices {
+        &self.matrices
+    }
+
+    /// The map of fixed dofs (free first). With linear constraints the model's coordinates are
+    /// `q` with `p_free = G q + g`, see [`DnurbsModel::full_coordinates`].
+    pub fn dof_map(&self) -> &DofMap {
+        &self.reduction.dof_map
+    }
+
+    /// Control points all of whose x, y, z dofs are fixed, ascending.
+    pub fn fixed_points(&self) -> &[usize] {
+        &self.reduction.fixed_points
+    }
+
+    /// With weights as unknowns and no weight fixed: the weight dof pinned to remove the
+    /// common-scale gauge (see [`Constraints`] and SPEC §3), else `None`.
+    pub fn gauge_weight(&self) -> Option<usize> {
+        self.reduction.gauge_weight
+    }
+
+    /// True when linear constraints are substituted (`p_free = G q + g`).
+    pub fn has_linear_constraints(&self) -> bool {
+        self.reduction.affine.is_some()
+    }
+
+    /// Number of reduced coordinates (free dofs, or null-space coordinates with linear
+    /// constraints).
+    pub fn n_free(&self) -> usize {
+        self.reduction.n_q
+    }
+
+    /// Full initial generalized coordinates `p(0)` (SPEC §1 ordering).
+    pub fn p0(&self) -> &[f64] {
+        &self.p0
+    }
+
+    /// The rest shape `p_rest` (SPEC §3).
+    pub fn p_rest(&self) -> &[f64] {
+        &self.p_rest
+    }
+
+    /// Reduced mass matrix `Pᵀ M P`.
+    pub fn reduced_mass(&self) -> &SparseMatrix {
+        match &self.mass_r {
+            SystemMatrix::Sparse(m) => m,
+            SystemMatrix::Diagonal(_) => unreachable!("D-NURBS mass is sparse"),
+        }
+    }
+
+    /// Reduced stiffness matrix `Pᵀ K P` (`K_ff` without linear constraints).
+    pub fn reduced_stiffness(&self) -> &SparseMatrix {
+        &self.stiffness_r
+    }
+
+    /// Reduced external force `Pᵀ f_p`.
+    pub fn reduced_force(&self) -> &[f64] {
+        &self.f_ext
+    }
+
+    /// Full `p` from reduced coordinates: free dofs from `q` (through `p = G q + g` with linear
+    /// constraints), fixed dofs at their `p(0)` values (SPEC §4).
+    pub fn full_coordinates(&self, q_free: &[f64]) -> Vec<f64> {
+        self.reduction.to_full(q_free)
+    }
+
+    /// Full velocity `ṗ` from a reduced one (zero on fixed dofs).
+    pub fn full_velocity(&self, v_free: &[f64]) -> Vec<f64> {
+        self.reduction.embed(v_free)
+    }
+
+    /// Reduced coordinates of a full `p` (the orthogonal projection with linear constraints).
+    pub fn reduced_coordinates(&self, p_full: &[f64]) -> Vec<f64> {
+        self.reduction.reduce_coordinates(p_full)
+    }
+
+    /// Initial state on the free dofs from per-control-point velocities (SPEC §4: fixed dofs
+    /// get zero). `velocity` has one entry per control point, or a single entry applied to
+    /// every point (missing entries count as zero, extra ones are ignored);
+    /// `weight_velocity` is `ẇ` of every free weight (4 dofs only).
+    pub fn initial_state(&self, velocity: &[[f64; 3]], weight_velocity: f64) -> State {
+        let m = self.matrices.dofs_per_point;
+        let n = self.geometry.n_control_points();
+        let mut v = vec![0.0; n * m];
+        for k in 0..n {
+            let vk = match velocity.len() {
+                1 => velocity[0],
+                len if k < len => velocity[k],
+                _ => [0.0; 3],
+            };
+            v[k * m..k * m + 3].copy_from_slice(&vk);
+            if m == 4 {
+                v[k * m + 3] = weight_velocity;
+            }
+        }
+        State {
+            t: 0.0,
+            q: self.reduction.reduce_coordinates(&self.p0),
+            v: self.reduction.reduce_vector(&v),
+        }
+    }
+
+    /// The elastic energy `½ (p − p_rest)ᵀ K (p − p_rest)` of a full `p` (SPEC §3).
+    pub fn elastic_energy(&self, p_full: &[f64]) -> f64 {
+        let d: Vec<f64> = p_full
+            .iter()
+            .zip(&self.p_rest)
+            .map(|(a, b)| a - b)
+            .collect();
+        0.5 * self.matrices.stiffness.quadratic_form(&d)
+    }
+
+    /// Steady state (paper eq. (8), SPEC §3): the full `p` solving
+    /// `K_ff (p_f − p_rest,f) = f_f − K_fc (p_c − p_rest,c)` on the free dofs (projected by `Gᵀ`
+    /// with linear constraints). Returns [`DnurbsError::Singular`] when the reduced stiffness is
+    /// singular, e.g. a free-floating body (nothing fixed: rigid translations cost no energy).
+    pub fn steady_state(&self) -> Result<Vec<f64>, DnurbsError> {
+        let n = self.reduction.n_q;
+        if n == 0 {
+            return Ok(self.reduction.to_full(&[]));
+        }
+        if self.stiffness_r.frobenius_norm() == 0.0 {
+            return Err(DnurbsError::Singular {
+                detail: "the stiffness matrix is zero: every alpha and beta coefficient is 0"
+                    .into(),
+            });
+        }
+        // Rigid translations are in the null space of K (partition of unity); they stay in the
+        // reduced space when no dof fixes them.
+        let m = self.matrices.dofs_per_point;
+        let n_total = self.p0.len();
+        for (x, name) in ["x", "y", "z"].iter().enumerate() {
+            let t: Vec<f64> = (0..n_total)
+                .map(|d| if d % m == x { 1.0 } else { 0.0 })
+                .collect();
+            let back = self.reduction.embed(&self.reduction.reduce_vector(&t));
+            let err: f64 = back
+                .iter()
+                .zip(&t)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if err < 1e-9 {
+                return Err(DnurbsError::Singular {
+                    detail: format!(
+                        "no constraint holds the body in {name}: a rigid translation along {name} \
+                         costs no elastic energy, so K is singular on the free dofs (free-floating \
+                         body; fix control points, e.g. fixed_rings = 1)"
+                    ),
+                });
+            }
+        }
+        let solver = SpdSolver::new(&self.stiffness_r).map_err(|e| match e {
+            LinalgError::NotPositiveDefinite { detail } => DnurbsError::Singular {
+                detail: format!(
+                    "the stiffness on the {n} free dofs is not positive definite ({detail}); \
+                     the constraints leave a zero-energy motion free"
+                ),
+            },
+            other => DnurbsError::Linalg(other),
+        })?;
+        // A singular PSD matrix can factor with tiny pivots: check that the factorization
+        // reproduces a known solution.
+        let y: Vec<f64> = (0..n)
+            .map(|i| 1.0 + ((i * 7919) % 13) as f64 / 13.0)
+            .collect();
+        let mut ky = vec![0.0; n];
+        self.stiffness_r.mul_vec(&y, &mut ky);
+        let x = solver.solve(&ky);
+        let rel = x
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt()
+            / y.iter().map(|a| a * a).sum::<f64>().sqrt();
+        if rel.is_nan() || rel >= 1e-6 {
+            return Err(DnurbsError::Singular {
+                detail: format!(
+                    "the stiffness on the {n} free dofs is numerically singular (a test solve \
+                     has relative error {rel:e}); the constraints leave a zero-energy motion free"
+                ),
+            });
+        }
+        let rhs: Vec<f64> = self
+            .f_ext
+            .iter()
+            .zip(&self.f_int0)
+            .map(|(f, b)| f - b)
+            .collect();
+        let q = solver.solve(&rhs);
+        if q.iter().any(|v| !v.is_finite()) {
+            return Err(DnurbsError::Singular {
+                detail: "the steady-state solve produced non-finite values".into(),
+            });
+        }
+        Ok(self.reduction.to_full(&q))
+    }
+
+    /// The `count` lowest modes `K φ = ω² M φ` on the free dofs (SPEC §3): the dense
+    /// generalized eigensolver when `n_free ≤ DENSE_MODES_LIMIT`, sparse shift-invert Lanczos
+    /// otherwise. Needs `μ > 0`.
+    pub fn modes(&self, count: usize) -> Result<Modes, DnurbsError> {
+        if self.material.mu <= 0.0 {
+            return Err(DnurbsError::Singular {
+                detail: format!(
+                    "the mass matrix is zero (mu = {}); modes need mu > 0",
+                    self.material.mu
+                ),
+            });
+        }
+        let n = self.reduction.n_q;
+        let count = count.min(n);
+        if count == 0 {
+            return Ok(Modes {
+                omega: Vec::new(),
+                vectors: DenseMatrix::zeros(n, 0),
+            });
+        }
+        let mass = self.reduced_mass();
+        let eig = if n <= DENSE_MODES_LIMIT {
+            let e = generalized_symmetric_eigen(&self.stiffness_r.to_dense(), &mass.to_dense())?;
+            let vectors = DenseMatrix::from_fn(n, count, |i, j| e.vectors[(i, j)]);
+            nurbspring_linalg::SymmetricEigen {
+                values: e.values[..count].to_vec(),
+                vectors,
+            }
+        } else {
+            // A small negative shift keeps K − σM positive definite even with rigid modes.
+            let tk: f64 = self.stiffness_r.diagonal().iter().sum();
+            let tm: f64 = mass.diagonal().iter().sum();
+            let shift = if tk > 0.0 { -1e-6 * tk / tm } else { -1.0 };
+            generalized_eigen_sparse_lowest(&self.stiffness_r, mass, count, shift)?
+        };
+        Ok(Modes {
+            omega: eig.values.iter().map(|&l| l.max(0.0).sqrt()).collect(),
+            vectors: eig.vectors,
+        })
+    }
+
+    /// The point `J(u, v) p = c(u, v)` of the shape with full coordinates `p_full` (with 4 dofs
+    /// the weights are taken from `p_full`); paper eqs. (1), (11).
+    pub fn point(&self, u: f64, v: f64, p_full: &[f64]) -> Result<[f64; 3], DnurbsError> {
+        if p_full.len() != self.p0.len() {
+            return Err(DnurbsError::DimensionMismatch {
+                what: "generalized coordinates p",
+                expected: self.p0.len(),
+                found: p_full.len(),
+            });
+        }
+        if self.options.weights_as_dofs {
+            Ok(self.geometry.with_coordinates(p_full, true)?.point(u, v)?)
+        } else {
+            let j = self.geometry.jacobian(u, v, 0, false)?;
+            Ok(j.apply(nurbspring_geom::Deriv::Value, p_full))
+        }
+    }
+}
+
+impl DynamicModel for DnurbsModel {
+    fn n_dofs(&self) -> usize {
+        self.reduction.n_q
+    }
+
+    fn mass(&self) -> &SystemMatrix {
+        &self.mass_r
+    }
+
+    fn damping(&self) -> Option<&SystemMatrix> {
+        self.damping_r.as_ref()
+    }
+
+    /// `f_int(q) = K_r q + Pᵀ K (o − p_rest)` (SPEC §3–4).
+    fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(&self.f_int0);
+        self.stiffness_r.mul_vec_add(1.0, q, out);
+    }
+
+    fn external_force(&self, _t: f64, out: &mut [f64]) {
+        out.copy_from_slice(&self.f_ext);
+    }
+
+    fn tangent_stiffness(&self, _q: &[f64]) -> SparseMatrix {
+        self.stiffness_r.clone()
+    }
+
+    fn potential_energy(&self, q: &[f64]) -> f64 {
+        self.elastic_energy(&self.reduction.to_full(q))
+    }
+
+    fn linear_stiffness(&self) -> Option<&SparseMatrix> {
+        Some(&self.stiffness_r)
+    }
+
+    fn external_potential(&self, _t: f64, q: &[f64]) -> f64 {
+        -q.iter().zip(&self.f_ext).map(|(a, b)| a * b).sum::<f64>()
+    }
+}

@@ -1,0 +1,322 @@
+//! Assembled matrices: symmetry, definiteness, partition of unity, rigid translations,
+//! refinement invariance, weights-as-dofs blocks, loads, determinism.
+
+use nurbspring_dnurbs::{
+    DnurbsOptions, Geometry, Integration, Loads, Material, PointLoad, assemble, assemble_scalar,
+};
+use nurbspring_linalg::{SparseMatrix, SpdSolver, symmetric_eigen};
+
+use crate::support::{self, tol};
+
+fn all_terms() -> Material {
+    Material {
+        mu: 1.7,
+        gamma: 0.3,
+        alpha11: 0.9,
+        alpha22: 1.3,
+        beta11: 0.02,
+        beta12: 0.05,
+        beta22: 0.04,
+    }
+}
+
+#[test]
+fn paper_mass_is_spd_and_sums_to_75() {
+    let g = Geometry::Surface(support::paper_surface());
+    let m = assemble(
+        &g,
+        &support::paper_material(),
+        &Loads::default(),
+        &DnurbsOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(m.mass.nrows(), 105);
+    assert!(
+        m.mass.symmetry_error() <= tol::SYMMETRY,
+        "{}",
+        m.mass.symmetry_error()
+    );
+    SpdSolver::new(&m.mass).expect("M must be positive definite");
+    // Σ_ij M_ij = 3 μ · (parameter area) = 3 · 25 · 1 (SPEC §7).
+    assert!(
+        (m.mass.sum() - 75.0).abs() <= tol::SUM * 75.0,
+        "{}",
+        m.mass.sum()
+    );
+    // Σ_ij K_ij = 0: K annihilates translations.
+    assert!(m.stiffness.sum().abs() <= tol::TRANSLATION * m.stiffness.frobenius_norm());
+}
+
+#[test]
+fn stiffness_is_symmetric_psd_and_annihilates_translations() {
+    for geometry in [
+        Geometry::Surface(support::paper_surface()),
+        Geometry::Surface(support::wavy_rational_patch()),
+        Geometry::Curve(support::straight_curve(3, 4, 2.0)),
+    ] {
+        for integration in [Integration::Parameter, Integration::Area] {
+            let options = DnurbsOptions {
+                integration,
+                ..DnurbsOptions::default()
+            };
+            let m = assemble(&geometry, &all_terms(), &Loads::default(), &options).unwrap();
+            let k = &m.stiffness;
+            assert!(
+                k.symmetry_error() <= tol::SYMMETRY,
+                "{}",
+                k.symmetry_error()
+            );
+            let n = k.nrows();
+            for x in 0..3 {
+                let t: Vec<f64> = (0..n).map(|d| if d % 3 == x { 1.0 } else { 0.0 }).collect();
+                let mut kt = vec![0.0; n];
+                k.mul_vec(&t, &mut kt);
+                let norm = kt.iter().map(|v| v * v).sum::<f64>().sqrt();
+                assert!(
+                    norm <= tol::TRANSLATION * k.frobenius_norm(),
+                    "K t_{x} = {norm:e}"
+                );
+            }
+            let eig = symmetric_eigen(&k.to_dense()).unwrap();
+            let max = eig.values.last().copied().unwrap();
+            assert!(
+                eig.values[0] >= -tol::PSD * max,
+                "λ_min = {:e}",
+                eig.values[0]
+            );
+            assert!(m.mass.symmetry_error() <= tol::SYMMETRY);
+            SpdSolver::new(&m.mass).expect("M must be positive definite");
+        }
+    }
+}
+
+/// `Cᵀ A_fine C = A_coarse` for a B-spline surface refined by knot insertion (SPEC §2): the
+/// fine space contains the coarse one and Gauss quadrature is exact for both.
+#[test]
+fn refinement_invariance_of_scalar_matrices() {
+    let coarse = support::wavy_patch();
+    let (fine, c) = coarse.refine_knots(&[0.15, 0.3, 0.5], &[0.2, 0.7]).unwrap();
+    let c = SparseMatrix::from_triplets(c.nrows, c.ncols, &c.triplets).unwrap();
+    let options = DnurbsOptions::default();
+    let sc = assemble_scalar(&Geometry::Surface(coarse), &all_terms(), &options).unwrap();
+    let sf = assemble_scalar(&Geometry::Surface(fine), &all_terms(), &options).unwrap();
+    let project = |a: &SparseMatrix| c.transpose().matmul(&a.matmul(&c).unwrap()).unwrap();
+    for (name, f, co) in [
+        ("M", &sf.mass, &sc.mass),
+        ("D", &sf.damping, &sc.damping),
+        ("K", &sf.stiffness, &sc.stiffness),
+    ] {
+        let err = support::rel_diff(&project(f), co);
+        assert!(err <= tol::REFINEMENT, "{name}: {err:e}");
+    }
+}
+
+#[test]
+fn refinement_invariance_of_dof_matrices_for_a_curve() {
+    let k = nurbspring_geom::KnotVector::try_new(vec![0., 0., 0., 0.5, 1., 1., 1.], 2).unwrap();
+    let pts = vec![[0., 0., 0.], [1., 2., 0.], [2., -1., 1.], [3., 0., 0.5]];
+    let coarse = nurbspring_geom::NurbsCurve::try_new(k, pts, vec![1.0; 4]).unwrap();
+    let (fine, c) = coarse.refine_knots(&[0.25, 0.6, 0.6]).unwrap();
+    let c = SparseMatrix::from_triplets(c.nrows, c.ncols, &c.triplets)
+        .unwrap()
+        .kron_identity(3);
+    let material = Material {
+        alpha11: 2.0,
+        beta11: 0.5,
+        ..all_terms()
+    };
+    let o = DnurbsOptions::default();
+    let mc = assemble(&Geometry::Curve(coarse), &material, &Loads::default(), &o).unwrap();
+    let mf = assemble(&Geometry::Curve(fine), &material, &Loads::default(), &o).unwrap();
+    let project = |a: &SparseMatrix| c.transpose().matmul(&a.matmul(&c).unwrap()).unwrap();
+    assert!(support::rel_diff(&project(&mf.mass), &mc.mass) <= tol::REFINEMENT);
+    assert!(support::rel_diff(&project(&mf.stiffness), &mc.stiffness) <= tol::REFINEMENT);
+}
+
+/// With weights as unknowns the xyz blocks are the constant-weight matrices, `J p = c` gives
+/// `M p = ∫ μ Jᵀ c`, and scaling every weight (which leaves c unchanged) is a null vector.
+#[test]
+fn weights_as_dofs_blocks_and_scaling_null_space() {
+    let geometry = Geometry::Surface(support::wavy_rational_patch());
+    let material = all_terms();
+    let o3 = DnurbsOptions::default();
+    let o4 = DnurbsOptions {
+        weights_as_dofs: true,
+        ..o3.clone()
+    };
+    let m3 = assemble(&geometry, &material, &Loads::default(), &o3).unwrap();
+    let m4 = assemble(&geometry, &material, &Loads::default(), &o4).unwrap();
+    let n = geometry.n_control_points();
+    let xyz: Vec<usize> = (0..n)
+        .flat_map(|k| (0..3).map(move |x| 4 * k + x))
+        .collect();
+    for (a4, a3) in [
+        (&m4.mass, &m3.mass),
+        (&m4.stiffness, &m3.stiffness),
+        (&m4.damping, &m3.damping),
+    ] {
+        assert!(a4.symmetry_error() <= tol::SYMMETRY);
+        let sub = a4.submatrix(&xyz, &xyz);
+        assert!(
+            support::rel_diff(&sub, a3) <= tol::SAME,
+            "{:e}",
+            support::rel_diff(&sub, a3)
+        );
+    }
+    let w_dir: Vec<f64> = (0..4 * n)
+        .map(|d| {
+            if d % 4 == 3 {
+                geometry.weights()[d / 4]
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    for a in [&m4.mass, &m4.stiffness] {
+        let mut y = vec![0.0; 4 * n];
+        a.mul_vec(&w_dir, &mut y);
+        let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!(
+            norm <= tol::TRANSLATION * a.frobenius_norm() * 10.0,
+            "{norm:e}"
+        );
+    }
+    // f_p with a uniform density: Σ_k f over xyz = density · ∫∫ 1 (J p = c, Σ R = 1).
+    let loads = Loads {
+        gravity: [0.0, 0.0, -9.81],
+        ..Loads::default()
+    };
+    let f4 = assemble(&geometry, &material, &loads, &o4).unwrap().force;
+    let f3 = assemble(&geometry, &material, &loads, &o3).unwrap().force;
+    let fz: f64 = (0..n).map(|k| f4[4 * k + 2]).sum();
+    assert!((fz - material.mu * -9.81).abs() <= tol::SUM * 20.0);
+    let f4_xyz: Vec<f64> = xyz.iter().map(|&d| f4[d]).collect();
+    assert!(support::max_abs_diff(&f4_xyz, &f3) <= tol::SAME);
+}
+
+#[test]
+fn area_integration_measures_the_surface_and_the_curve() {
+    let material = Material {
+        mu: 2.0,
+        ..Material::default()
+    };
+    let area = DnurbsOptions {
+        integration: Integration::Area,
+        ..DnurbsOptions::default()
+    };
+    // A flat 3 × 5 rectangle: Σ M = 3 μ · 15.
+    let patch = Geometry::Surface(support::flat_patch(3, 3, 2, 3.0, 5.0));
+    let m = assemble(&patch, &material, &Loads::default(), &area).unwrap();
+    assert!(
+        (m.mass.sum() - 3.0 * 2.0 * 15.0).abs() <= tol::SUM * 90.0,
+        "{}",
+        m.mass.sum()
+    );
+    // A straight curve of length 2.5: Σ M = 3 μ · 2.5.
+    let curve = Geometry::Curve(support::straight_curve(2, 3, 2.5));
+    let m = assemble(&curve, &material, &Loads::default(), &area).unwrap();
+    assert!(
+        (m.mass.sum() - 15.0).abs() <= tol::SUM * 15.0,
+        "{}",
+        m.mass.sum()
+    );
+    // Parameter integration of the same curve measures the parameter interval.
+    let m = assemble(
+        &curve,
+        &material,
+        &Loads::default(),
+        &DnurbsOptions::default(),
+    )
+    .unwrap();
+    assert!((m.mass.sum() - 6.0).abs() <= tol::SUM * 6.0);
+}
+
+#[test]
+fn loads_sum_to_the_applied_force() {
+    let g = Geometry::Surface(support::paper_surface());
+    let loads = Loads {
+        gravity: [0.0, 0.0, -9.81],
+        distributed: [0.5, 0.0, 0.0],
+        point: vec![PointLoad {
+            u: 0.3,
+            v: 0.6,
+            force: [1.0, -2.0, 3.0],
+        }],
+    };
+    let m = assemble(
+        &g,
+        &support::paper_material(),
+        &loads,
+        &DnurbsOptions::default(),
+    )
+    .unwrap();
+    let total: Vec<f64> = (0..3)
+        .map(|x| m.force.iter().skip(x).step_by(3).sum())
+        .collect();
+    // μ g · 1 + distributed · 1 + F (partition of unity).
+    let expected = [0.5 + 1.0, -2.0, 25.0 * -9.81 + 3.0];
+    assert!(
+        support::max_abs_diff(&total, &expected) <= tol::SUM * 250.0,
+        "{total:?}"
+    );
+    // The point load alone is J(u0, v0)ᵀ F.
+    let only_point = Loads {
+        point: loads.point.clone(),
+        ..Loads::default()
+    };
+    let f = assemble(
+        &g,
+        &support::paper_material(),
+        &only_point,
+        &DnurbsOptions::default(),
+    )
+    .unwrap()
+    .force;
+    let j = g.jacobian(0.3, 0.6, 0, false).unwrap();
+    let mut expected = vec![0.0; 105];
+    j.apply_transpose_add(
+        nurbspring_geom::Deriv::Value,
+        [1.0, -2.0, 3.0],
+        1.0,
+        &mut expected,
+    );
+    assert_eq!(f, expected);
+}
+
+#[test]
+fn one_thread_and_many_threads_agree_exactly() {
+    let g = Geometry::Surface(support::wavy_rational_patch());
+    for weights_as_dofs in [false, true] {
+        let o = DnurbsOptions {
+            weights_as_dofs,
+            ..DnurbsOptions::default()
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let one = pool.install(|| assemble(&g, &all_terms(), &Loads::default(), &o).unwrap());
+        let many = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .unwrap()
+            .install(|| assemble(&g, &all_terms(), &Loads::default(), &o).unwrap());
+        assert_eq!(one.mass, many.mass);
+        assert_eq!(one.stiffness, many.stiffness);
+        assert_eq!(one.force, many.force);
+    }
+}
+
+#[test]
+fn more_quadrature_points_change_nothing_for_b_splines() {
+    // 4 points per direction integrate bicubic products exactly; 6 must agree to round-off.
+    let g = Geometry::Surface(support::wavy_patch());
+    let s4 = assemble_scalar(&g, &all_terms(), &DnurbsOptions::default()).unwrap();
+    let o6 = DnurbsOptions {
+        quadrature_points: 6,
+        ..DnurbsOptions::default()
+    };
+    let s6 = assemble_scalar(&g, &all_terms(), &o6).unwrap();
+    assert!(support::rel_diff(&s6.mass, &s4.mass) <= tol::SAME);
+    assert!(support::rel_diff(&s6.stiffness, &s4.stiffness) <= tol::SAME);
+}

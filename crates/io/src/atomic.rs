@@ -1,0 +1,195 @@
+//! Atomic file writes: every file nurbspring writes goes through [`write_atomic`].
+//!
+//! The content is written to a temporary file in the target's folder (a unique name
+//! `.{name}.tmp-{pid}-{counter}`), flushed and synced to disk, then renamed over the target. A
+//! reader therefore sees either the old file or the complete new one, never a half-written file,
+//! even if the program is interrupted. On any error (including a panic inside the writer
+//! closure) the temporary file is removed and an existing target is left untouched.
+
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::OutputError;
+
+/// Distinguishes temporary files of concurrent writes within one process.
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Removes the temporary file when dropped, unless disarmed after a successful rename.
+struct TempGuard {
+    path: PathBuf,
+    armed: bool,
+}
+
+impl Drop for TempGuard {
+    fn drop(&mut self) {
+        if self.armed {
+            let _ = std::fs::remove_file(&self.path);
+        }
+    }
+}
+
+/// The folder a file lives in (`.` for a bare file name).
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Creates a fresh temporary file next to `path`; retries on the (unlikely) name collision.
+fn create_temp(path: &Path) -> Result<(File, PathBuf), OutputError> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| OutputError::invalid(path, "the path has no file name"))?
+        .to_string_lossy()
+        .into_owned();
+    let dir = parent_dir(path);
+    let pid = std::process::id();
+    loop {
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp = dir.join(format!(".{name}.tmp-{pid}-{n}"));
+        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
+            Ok(f) => return Ok((f, tmp)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(OutputError::io(path, e)),
+        }
+    }
+}
+
+/// Writes a file atomically: `write` fills a buffered writer on a temporary file in the same
+/// folder, which is then flushed, synced and renamed over `path`.
+///
+/// If `write` returns an error (or panics), or any step after it fails, the temporary file is
+/// deleted and an existing file at `path` keeps its old content.
+///
+/// ```
+/// # let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("hello.txt");
+/// nurbspring_io::atomic::write_atomic(&path, |w| writeln!(w, "hello")).unwrap();
+/// assert_eq!(std::fs::read_to_string(&path).unwrap(), "hello\n");
+/// ```
+pub fn write_atomic<F>(path: impl AsRef<Path>, write: F) -> Result<(), OutputError>
+where
+    F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+{
+    let path = path.as_ref();
+    let (file, tmp) = create_temp(path)?;
+    let mut guard = TempGuard {
+        path: tmp,
+        armed: true,
+    };
+    let mut writer = BufWriter::new(file);
+    write(&mut writer).map_err(|e| OutputError::io(path, e))?;
+    writer.flush().map_err(|e| OutputError::io(path, e))?;
+    let file = writer
+        .into_inner()
+        .map_err(|e| OutputError::io(path, e.into_error()))?;
+    file.sync_all().map_err(|e| OutputError::io(path, e))?;
+    drop(file);
+    std::fs::rename(&guard.path, path).map_err(|e| OutputError::io(path, e))?;
+    guard.armed = false;
+    // Make the rename itself durable where the platform allows syncing a directory.
+    if let Ok(dir) = File::open(parent_dir(path)) {
+        let _ = dir.sync_all();
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `path` atomically (see [`write_atomic`]).
+pub fn write_atomic_bytes(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), OutputError> {
+    write_atomic(path, |w| w.write_all(bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn writes_and_replaces() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.txt");
+        write_atomic_bytes(&p, b"one").unwrap();
+        write_atomic_bytes(&p, b"two").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"two");
+        assert_eq!(entries(dir.path()), vec!["a.txt".to_string()]);
+    }
+
+    #[test]
+    fn failing_writer_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("b.txt");
+        let err = write_atomic(&p, |w| {
+            w.write_all(b"partial")?;
+            Err(std::io::Error::other("disk on fire"))
+        })
+        .unwrap_err();
+        assert!(err.to_string().contains("disk on fire"), "{err}");
+        assert!(err.to_string().contains("b.txt"), "{err}");
+        assert!(entries(dir.path()).is_empty(), "{:?}", entries(dir.path()));
+    }
+
+    #[test]
+    fn failing_writer_keeps_existing_target() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("c.txt");
+        write_atomic_bytes(&p, b"original").unwrap();
+        let r = write_atomic(&p, |w| {
+            w.write_all(&[b'x'; 100_000])?;
+            Err(std::io::Error::other("stop"))
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read(&p).unwrap(), b"original");
+        assert_eq!(entries(dir.path()), vec!["c.txt".to_string()]);
+    }
+
+    #[test]
+    fn panicking_writer_leaves_no_temp_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("d.txt");
+        let r = std::panic::catch_unwind(|| {
+            let _ = write_atomic(&p, |_| panic!("boom"));
+        });
+        assert!(r.is_err());
+        assert!(entries(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn missing_folder_is_an_io_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("no/such/dir/e.txt");
+        let err = write_atomic_bytes(&p, b"x").unwrap_err();
+        assert!(matches!(err, OutputError::Io { .. }));
+        assert!(err.to_string().contains("e.txt"));
+    }
+
+    #[test]
+    fn concurrent_writes_use_distinct_temp_files() {
+        let dir = tempfile::tempdir().unwrap();
+        std::thread::scope(|s| {
+            for t in 0..4 {
+                let p = dir.path().join(format!("f{t}.txt"));
+                s.spawn(move || {
+                    for i in 0..20 {
+                        write_atomic_bytes(&p, format!("{t}-{i}").as_bytes()).unwrap();
+                    }
+                });
+            }
+        });
+        assert_eq!(entries(dir.path()).len(), 4);
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("f2.txt")).unwrap(),
+            "2-19"
+        );
+    }
+}

@@ -1,0 +1,479 @@
+//! Figures with plotters: SVG or PNG (chosen by the file extension), drawn with the DejaVu Sans
+//! font compiled into the binary (registered with plotters' `ab_glyph` backend; no system font
+//! lookup, so figures look the same on every machine).
+//!
+//! Used for central-node trajectories and energies ([`plot_series`]), the mass-candidate scan
+//! (log-scale y, [`PlotOptions::log_y`]) and modal spectra ([`plot_spectrum`]). Points with a
+//! non-finite coordinate (and, on a log axis, non-positive y) are skipped, counted in
+//! [`PlotSummary`] and mentioned in the caption, so a diverged run still gives a figure.
+//!
+//! ```
+//! use nurbspring_io::plot::{Series, plot_series};
+//! # let dir = tempfile::tempdir().unwrap();
+//! let t: Vec<f64> = (0..50).map(|k| 0.08 * k as f64).collect();
+//! let msm = Series::line("MSM", t.iter().map(|&t| (t, 2.0 - 0.2 * t.sin())).collect());
+//! let summary = plot_series(dir.path().join("z.svg"), "central node", "t [s]", "z", &[msm]).unwrap();
+//! assert_eq!(summary.skipped, 0);
+//! ```
+
+use std::ops::Range;
+use std::path::Path;
+use std::sync::OnceLock;
+
+use plotters::coord::Shift;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::prelude::*;
+
+use crate::OutputError;
+use crate::atomic::write_atomic_bytes;
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SeriesStyle {
+    /// A polyline through the points (in the given order).
+    #[default]
+    Line,
+    /// Markers only (the marker shape changes with the series index).
+    Points,
+    /// A polyline with markers.
+    LinePoints,
+}
+
+/// One named data series.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend entry.
+    pub name: String,
+    /// `(x, y)` pairs.
+    pub points: Vec<(f64, f64)>,
+    /// Line, markers or both.
+    pub style: SeriesStyle,
+}
+
+impl Series {
+    /// A series drawn as a line.
+    pub fn line(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        Self {
+            name: name.into(),
+            points,
+            style: SeriesStyle::Line,
+        }
+    }
+
+    /// A series drawn as markers.
+    pub fn points(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        Self {
+            name: name.into(),
+            points,
+            style: SeriesStyle::Points,
+        }
+    }
+}
+
+/// Title, labels, scale and size of a figure.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlotOptions {
+    /// Caption above the plot.
+    pub title: String,
+    /// x axis label.
+    pub x_label: String,
+    /// y axis label.
+    pub y_label: String,
+    /// Logarithmic y axis (non-positive y values are skipped).
+    pub log_y: bool,
+    /// x values are whole numbers (mode numbers): ticks at integers only.
+    pub integer_x: bool,
+    /// Width in pixels (default 1024).
+    pub width: u32,
+    /// Height in pixels (default 640).
+    pub height: u32,
+}
+
+impl PlotOptions {
+    /// Linear axes, 1024 × 640 pixels.
+    pub fn new(title: impl Into<String>, x_label: impl Into<String>, y_label: impl Into<String>) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            log_y: false,
+            integer_x: false,
+            width: 1024,
+            height: 640,
+        }
+    }
+}
+
+/// What was drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PlotSummary {
+    /// Points drawn, over all series.
+    pub drawn: usize,
+    /// Points skipped: a non-finite coordinate, or y ≤ 0 on a log axis.
+    pub skipped: usize,
+}
+
+/// Output format, from the file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Svg,
+    Png,
+}
+
+/// Colours (Tableau 10) cycled over the series.
+const COLORS: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// The family name under which the embedded font is registered. SVG files name it too, so
+/// viewers fall back to their own sans-serif font.
+const FONT_FAMILY: &str = "sans-serif";
+
+/// Registers the embedded DejaVu Sans once per process.
+fn ensure_font() -> Result<(), String> {
+    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
+    REGISTERED
+        .get_or_init(|| {
+            let fail = |_| "the embedded DejaVu Sans font could not be loaded".to_string();
+            plotters::style::register_font(FONT_FAMILY, FontStyle::Normal, dejavu::sans::regular())
+                .map_err(fail)?;
+            plotters::style::register_font(FONT_FAMILY, FontStyle::Bold, dejavu::sans::bold())
+                .map_err(fail)
+        })
+        .clone()
+}
+
+/// Plots several named series with linear axes (1024 × 640); the format (`.svg` or `.png`)
+/// comes from the extension of `path`.
+pub fn plot_series(
+    path: impl AsRef<Path>,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<PlotSummary, OutputError> {
+    plot_series_with(path, &PlotOptions::new(title, x_label, y_label), series)
+}
+
+/// Plots a spectrum: each set of values (e.g. D-NURBS and MSM eigenfrequencies) as markers at
+/// x = mode number 1, 2, ….
+pub fn plot_spectrum(
+    path: impl AsRef<Path>,
+    title: &str,
+    y_label: &str,
+    sets: &[(&str, &[f64])],
+) -> Result<PlotSummary, OutputError> {
+    let series: Vec<Series> = sets
+        .iter()
+        .map(|(name, values)| {
+            Series::points(
+                *name,
+                values
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &v)| ((k + 1) as f64, v))
+                    .collect(),
+            )
+        })
+        .collect();
+    let mut options = PlotOptions::new(title, "mode", y_label);
+    options.integer_x = true;
+    plot_series_with(path, &options, &series)
+}
+
+/// Plots several named series with the given options.
+pub fn plot_series_with(
+    path: impl AsRef<Path>,
+    options: &PlotOptions,
+    series: &[Series],
+) -> Result<PlotSummary, OutputError> {
+    let path = path.as_ref();
+    let format = match path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("svg") => Format::Svg,
+        Some("png") => Format::Png,
+        other => {
+            return Err(OutputError::invalid(
+                path,
+                format!(
+                    "cannot tell the figure format from the extension {:?}: use .svg or .png",
+                    other.unwrap_or("")
+                ),
+            ));
+        }
+    };
+    if options.width < 200 || options.height < 150 || options.width > 8192 || options.height > 8192 {
+        return Err(OutputError::invalid(
+            path,
+            format!(
+                "figure size {} x {} is outside 200 x 150 ..= 8192 x 8192",
+                options.width, options.height
+            ),
+        ));
+    }
+    let plot_err = |message: String| OutputError::Plot {
+        path: path.to_path_buf(),
+        message,
+    };
+    ensure_font().map_err(plot_err)?;
+
+    // Keep only drawable points.
+    let mut summary = PlotSummary::default();
+    let clean: Vec<Series> = series
+        .iter()
+        .map(|s| {
+            let points: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|&(x, y)| x.is_finite() && y.is_finite() && (!options.log_y || y > 0.0))
+                .collect();
+            summary.drawn += points.len();
+            summary.skipped += s.points.len() - points.len();
+            Series {
+                name: s.name.clone(),
+                points,
+                style: s.style,
+            }
+        })
+        .collect();
+    let caption = if summary.skipped > 0 {
+        let what = if options.log_y {
+            "non-finite or non-positive"
+        } else {
+            "non-finite"
+        };
+        let noun = if summary.skipped == 1 { "point" } else { "points" };
+        format!("{} ({} {what} {noun} omitted)", options.title, summary.skipped)
+    } else {
+        options.title.clone()
+    };
+
+    let size = (options.width, options.height);
+    let bytes = match format {
+        Format::Svg => {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+                draw(&root, options, &caption, &clean).map_err(plot_err)?;
+                root.present().map_err(|e| plot_err(e.to_string()))?;
+            }
+            svg.into_bytes()
+        }
+        Format::Png => {
+            let (w, h) = size;
+            let mut rgb = vec![0u8; w as usize * h as usize * 3];
+            {
+                let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+                draw(&root, options, &caption, &clean).map_err(plot_err)?;
+                root.present().map_err(|e| plot_err(e.to_string()))?;
+            }
+            let mut png = Vec::new();
+            image::ImageEncoder::write_image(
+                image::codecs::png::PngEncoder::new(&mut png),
+                &rgb,
+                w,
+                h,
+                image::ColorType::Rgb8,
+            )
+            .map_err(|e| plot_err(format!("PNG encoding failed: {e}")))?;
+            png
+        }
+    };
+    write_atomic_bytes(path, &bytes)?;
+    Ok(summary)
+}
+
+/// Axis range covering `values` with a 5 % margin (a unit range when empty or degenerate).
+fn linear_range(values: impl Iterator<Item = f64>) -> Range<f64> {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+    if lo > hi {
+        return 0.0..1.0;
+    }
+    let span = hi - lo;
+    if span == 0.0 {
+        let d = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
+        return (lo - d)..(hi + d);
+    }
+    let pad = 0.05 * span;
+    if pad.is_finite() && (lo - pad).is_finite() && (hi + pad).is_finite() {
+        (lo - pad)..(hi + pad)
+    } else {
+        lo..hi
+    }
+}
+
+/// Positive axis range for a log scale, padded by a factor 1.5 at each end.
+fn log_range(values: impl Iterator<Item = f64>) -> Range<f64> {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+    if lo > hi {
+        return 0.1..10.0;
+    }
+    let (lo, hi) = if lo == hi { (lo / 10.0, hi * 10.0) } else { (lo / 1.5, hi * 1.5) };
+    let lo = if lo > 0.0 { lo } else { f64::MIN_POSITIVE };
+    let hi = if hi.is_finite() { hi } else { f64::MAX };
+    lo..hi
+}
+
+/// The corner of the plot area covering the fewest data points, for the legend box.
+fn legend_corner(series: &[Series], log_y: bool) -> SeriesLabelPosition {
+    let ty = |y: f64| if log_y { y.log10() } else { y };
+    let pts: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|&(x, y)| (x, ty(y))))
+        .collect();
+    let x = linear_range(pts.iter().map(|p| p.0));
+    let y = linear_range(pts.iter().map(|p| p.1));
+    let norm = |v: f64, r: &Range<f64>| (v - r.start) / (r.end - r.start);
+    let corners = [
+        (SeriesLabelPosition::UpperRight, true, true),
+        (SeriesLabelPosition::UpperLeft, false, true),
+        (SeriesLabelPosition::LowerRight, true, false),
+        (SeriesLabelPosition::LowerLeft, false, false),
+    ];
+    let rows = series.len() as f64;
+    let height = (0.06 + 0.045 * rows).min(0.6);
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+    for (pos, right, upper) in corners {
+        let count = pts
+            .iter()
+            .filter(|&&(px, py)| {
+                let (u, v) = (norm(px, &x), norm(py, &y));
+                let in_x = if right { u > 0.68 } else { u < 0.32 };
+                let in_y = if upper { v > 1.0 - height } else { v < height };
+                in_x && in_y
+            })
+            .count();
+        if count < best.0 {
+            best = (count, pos);
+        }
+    }
+    best.1
+}
+
+/// Draws the whole figure on `root`.
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    options: &PlotOptions,
+    caption: &str,
+    series: &[Series],
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let x_range = linear_range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
+    let y_values = || series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
+    let mut builder = ChartBuilder::on(root);
+    builder
+        .caption(caption, (FONT_FAMILY, 24))
+        .margin(16)
+        .x_label_area_size(48)
+        .y_label_area_size(80);
+    if options.log_y {
+        let chart = builder
+            .build_cartesian_2d(x_range, log_range(y_values()).log_scale())
+            .map_err(|e| e.to_string())?;
+        fill_chart(chart, options, series)
+    } else {
+        let chart = builder
+            .build_cartesian_2d(x_range, linear_range(y_values()))
+            .map_err(|e| e.to_string())?;
+        fill_chart(chart, options, series)
+    }
+}
+
+/// Mesh, series and legend, for either y scale.
+fn fill_chart<'a, DB, Y>(
+    mut chart: ChartContext<'a, DB, Cartesian2d<<Range<f64> as AsRangedCoord>::CoordDescType, Y>>,
+    options: &PlotOptions,
+    series: &[Series],
+) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let x_span = chart.x_range();
+    let integer_ticks = (x_span.end.floor() - x_span.start.ceil()).max(0.0) as usize + 1;
+    let mut mesh = chart.configure_mesh();
+    if options.integer_x && integer_ticks <= 12 {
+        mesh.x_labels(integer_ticks)
+            .x_label_formatter(&|v: &f64| format!("{v:.0}"));
+    }
+    mesh.x_desc(options.x_label.as_str())
+        .y_desc(options.y_label.as_str())
+        .label_style((FONT_FAMILY, 14))
+        .axis_desc_style((FONT_FAMILY, 16))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (k, s) in series.iter().enumerate() {
+        let color = COLORS[k % COLORS.len()];
+        let marker = k % 3;
+        let has_line = matches!(s.style, SeriesStyle::Line | SeriesStyle::LinePoints);
+        let has_markers = matches!(s.style, SeriesStyle::Points | SeriesStyle::LinePoints);
+        if has_line {
+            let anno = chart
+                .draw_series(LineSeries::new(s.points.iter().copied(), color.stroke_width(2)))
+                .map_err(|e| e.to_string())?;
+            anno.label(s.name.as_str()).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        }
+        if has_markers {
+            let pts = s.points.iter().copied();
+            let label = if has_line { "" } else { s.name.as_str() };
+            match marker {
+                0 => {
+                    let anno = chart
+                        .draw_series(pts.map(|p| Circle::new(p, 4, color.filled())))
+                        .map_err(|e| e.to_string())?;
+                    if !has_line {
+                        anno.label(label)
+                            .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+                    }
+                }
+                1 => {
+                    let anno = chart
+                        .draw_series(pts.map(|p| Cross::new(p, 5, color.stroke_width(2))))
+                        .map_err(|e| e.to_string())?;
+                    if !has_line {
+                        anno.label(label).legend(move |(x, y)| {
+                            Cross::new((x + 10, y), 5, color.stroke_width(2))
+                        });
+                    }
+                }
+                _ => {
+                    let anno = chart
+                        .draw_series(pts.map(|p| TriangleMarker::new(p, 5, color.filled())))
+                        .map_err(|e| e.to_string())?;
+                    if !has_line {
+                        anno.label(label).legend(move |(x, y)| {
+                            TriangleMarker::new((x + 10, y), 5, color.filled())
+                        });
+                    }
+                }
+            }
+        }
+    }
+    if !series.is_empty() {
+        chart
+            .configure_series_labels()
+            .label_font((FONT_FAMILY, 14))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(legend_corner(series, options.log_y))
+            .draw()
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,619 @@
+//! Integration tests of nurbspring-linalg against dense references and analytic answers.
+
+mod support;
+
+use nurbspring_linalg::*;
+use proptest::prelude::*;
+use support::{
+    Rng, laplacian_1d, laplacian_eigenvalue, max_diff, norm, random_dense, random_spd,
+    relative_residual, tol,
+};
+
+// ---------------------------------------------------------------- assembly and sparse algebra
+
+#[test]
+fn assembly_sums_duplicates_and_matches_dense() {
+    let mut rng = Rng(1);
+    let (nr, nc) = (17, 13);
+    let entries: Vec<(usize, usize)> = (0..400).map(|_| (rng.index(nr), rng.index(nc))).collect();
+    let values: Vec<f64> = (0..400).map(|_| rng.next()).collect();
+    let pattern = AssemblyPattern::new(nr, nc, &entries).unwrap();
+    assert_eq!(pattern.n_entries(), 400);
+    let a = pattern.assemble(&values);
+    let mut dense = DenseMatrix::zeros(nr, nc);
+    for (&(i, j), &v) in entries.iter().zip(&values) {
+        dense[(i, j)] += v;
+    }
+    assert!(max_diff(&a.to_dense(), &dense) < tol::EXACT);
+    // Unique (i, j) count equals the stored entries; rows sorted in each column.
+    let mut unique = entries.clone();
+    unique.sort();
+    unique.dedup();
+    assert_eq!(a.nnz(), unique.len());
+    for j in 0..nc {
+        let rows = &a.row_idx()[a.col_ptr()[j]..a.col_ptr()[j + 1]];
+        assert!(rows.windows(2).all(|w| w[0] < w[1]));
+    }
+    // Same pattern for new values, and assemble_into agrees.
+    let values2: Vec<f64> = values.iter().map(|v| 3.0 * v + 1.0).collect();
+    let b = pattern.assemble(&values2);
+    assert!(a.same_pattern(&b));
+    let mut c = pattern.zero_matrix();
+    pattern.assemble_into(&values2, &mut c);
+    assert!(
+        c.values()
+            .iter()
+            .zip(b.values())
+            .all(|(x, y)| (x - y).abs() < tol::EXACT)
+    );
+}
+
+#[test]
+fn from_triplets_rejects_out_of_range_and_sums() {
+    assert!(matches!(
+        SparseMatrix::from_triplets(2, 2, &[(2, 0, 1.0)]),
+        Err(LinalgError::IndexOutOfBounds {
+            row: 2,
+            col: 0,
+            nrows: 2,
+            ncols: 2
+        })
+    ));
+    let a = SparseMatrix::from_triplets(2, 3, &[(1, 2, 1.5), (0, 0, 1.0), (1, 2, 2.5)]).unwrap();
+    assert_eq!(a.get(1, 2), 4.0);
+    assert_eq!(a.get(0, 1), 0.0);
+    assert_eq!(
+        a.triplets().collect::<Vec<_>>(),
+        vec![(0, 0, 1.0), (1, 2, 4.0)]
+    );
+    assert_eq!(a.sum(), 5.0);
+}
+
+#[test]
+fn sparse_operations_match_dense() {
+    let mut rng = Rng(7);
+    let rand_sparse = |nr: usize, nc: usize, rng: &mut Rng| {
+        let t: Vec<_> = (0..(nr * nc / 3))
+            .map(|_| (rng.index(nr), rng.index(nc), rng.next()))
+            .collect();
+        SparseMatrix::from_triplets(nr, nc, &t).unwrap()
+    };
+    let a = rand_sparse(9, 7, &mut rng);
+    let b = rand_sparse(7, 5, &mut rng);
+    let c = rand_sparse(9, 7, &mut rng);
+    let (ad, bd, cd) = (a.to_dense(), b.to_dense(), c.to_dense());
+    assert!(max_diff(&a.transpose().to_dense(), &ad.transpose()) == 0.0);
+    assert!(max_diff(&a.matmul(&b).unwrap().to_dense(), &ad.matmul(&bd)) < tol::EXACT);
+    assert!(matches!(
+        a.matmul(&c),
+        Err(LinalgError::DimensionMismatch { .. })
+    ));
+    let lc = SparseMatrix::linear_combination(2.0, &a, -0.5, &c).unwrap();
+    let lcd = DenseMatrix::from_fn(9, 7, |i, j| 2.0 * ad[(i, j)] - 0.5 * cd[(i, j)]);
+    assert!(max_diff(&lc.to_dense(), &lcd) < tol::EXACT);
+    let fd: f64 = ad.data().iter().zip(cd.data()).map(|(x, y)| x * y).sum();
+    assert!((a.frobenius_dot(&c) - fd).abs() < tol::EXACT);
+    assert!((a.frobenius_norm() - ad.frobenius_norm()).abs() < tol::EXACT);
+    // submatrix with reordered and repeated indices
+    let rows = [8, 0, 3, 3];
+    let cols = [6, 1, 2];
+    let sub = a.submatrix(&rows, &cols).to_dense();
+    let subd = DenseMatrix::from_fn(4, 3, |i, j| ad[(rows[i], cols[j])]);
+    assert_eq!(sub, subd);
+    // mat-vec
+    let x: Vec<f64> = (0..7).map(|_| rng.next()).collect();
+    let mut y = vec![0.0; 9];
+    a.mul_vec(&x, &mut y);
+    let yd = ad.mul_vec(&x);
+    assert!(y.iter().zip(&yd).all(|(p, q)| (p - q).abs() < tol::EXACT));
+    a.mul_vec_add(-1.0, &x, &mut y);
+    assert!(norm(&y) < tol::EXACT);
+    // scale, diagonal
+    let mut s = a.clone();
+    s.scale(3.0);
+    assert!(
+        s.values()
+            .iter()
+            .zip(a.values())
+            .all(|(p, q)| *p == 3.0 * q)
+    );
+    let diag = a.diagonal();
+    assert!((0..7).all(|i| diag[i] == ad[(i, i)]));
+}
+
+#[test]
+fn kron_identity_quadratic_form_and_symmetry_match_dense() {
+    let s = SparseMatrix::from_triplets(
+        3,
+        3,
+        &[
+            (0, 0, 2.0),
+            (0, 1, -1.0),
+            (1, 0, -1.0),
+            (1, 1, 2.0),
+            (2, 1, 0.5),
+            (2, 2, 1.0),
+        ],
+    )
+    .unwrap();
+    let k = s.kron_identity(3);
+    let sd = s.to_dense();
+    let kd = DenseMatrix::from_fn(9, 9, |r, c| {
+        if r % 3 == c % 3 {
+            sd[(r / 3, c / 3)]
+        } else {
+            0.0
+        }
+    });
+    assert_eq!(k.to_dense(), kd);
+    let x: Vec<f64> = (0..9).map(|i| (i as f64 * 0.7).sin()).collect();
+    let kx = kd.mul_vec(&x);
+    let q: f64 = x.iter().zip(&kx).map(|(a, b)| a * b).sum();
+    assert!((k.quadratic_form(&x) - q).abs() < tol::EXACT);
+    // symmetry error: only (2,1) = 0.5 is unmatched
+    let expected = (2.0 * 0.25_f64).sqrt() / s.frobenius_norm();
+    assert!((s.symmetry_error() - expected).abs() < tol::EXACT);
+    assert!((s.to_dense().symmetry_error() - expected).abs() < tol::EXACT);
+    assert_eq!(laplacian_1d(5).symmetry_error(), 0.0);
+    assert_eq!(SparseMatrix::zeros(3, 3).symmetry_error(), 0.0);
+    assert_eq!(SparseMatrix::from_dense(&sd, 0.0), s);
+    assert_eq!(
+        SparseMatrix::identity(4).to_dense(),
+        DenseMatrix::identity(4)
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
+    #[test]
+    fn prop_transpose_and_product_match_dense(seed in 0u64..10_000, nr in 1usize..9, nk in 1usize..9, nc in 1usize..9) {
+        let mut rng = Rng(seed);
+        let a = random_dense(nr, nk, &mut rng);
+        let b = random_dense(nk, nc, &mut rng);
+        let (sa, sb) = (SparseMatrix::from_dense(&a, 0.3), SparseMatrix::from_dense(&b, 0.3));
+        let (a, b) = (sa.to_dense(), sb.to_dense());
+        prop_assert!(max_diff(&sa.matmul(&sb).unwrap().to_dense(), &a.matmul(&b)) < tol::EXACT);
+        prop_assert_eq!(sa.transpose().transpose(), sa.clone());
+        prop_assert_eq!(sa.transpose().to_dense(), a.transpose());
+    }
+}
+
+// ---------------------------------------------------------------- solvers
+
+#[test]
+fn spd_solver_residual_and_refactor() {
+    let mut rng = Rng(42);
+    let n = 400;
+    let a = random_spd(n, 4, 1.0, &mut rng);
+    let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    let mut solver = SpdSolver::new(&a).unwrap();
+    assert_eq!(solver.dim(), n);
+    let x = solver.solve(&b);
+    assert!(relative_residual(&a, &x, &b) < tol::RESIDUAL);
+    // New values on the same pattern: scale the off-diagonal part, keep it SPD.
+    let mut a2 = a.clone();
+    let (cp, ri) = (a2.col_ptr().to_vec(), a2.row_idx().to_vec());
+    for j in 0..n {
+        for k in cp[j]..cp[j + 1] {
+            if ri[k] != j {
+                a2.values_mut()[k] *= -0.5;
+            }
+        }
+    }
+    solver.refactor(&a2).unwrap();
+    let mut x2 = b.clone();
+    solver.solve_in_place(&mut x2);
+    assert!(relative_residual(&a2, &x2, &b) < tol::RESIDUAL);
+    assert!(
+        relative_residual(&a, &x2, &b) > 1e-3,
+        "refactor must use the new values"
+    );
+    // Another pattern is accepted too (new symbolic analysis).
+    let lap = laplacian_1d(n);
+    solver.refactor(&lap).unwrap();
+    let x3 = solver.solve(&b);
+    assert!(relative_residual(&lap, &x3, &b) < 1e-10); // cond(L) ≈ 6.5e4
+}
+
+#[test]
+fn spd_solver_rejects_indefinite() {
+    let mut a = laplacian_1d(10);
+    // Make one diagonal entry negative: indefinite.
+    let k = a.position(4, 4).unwrap();
+    a.values_mut()[k] = -1.0;
+    assert!(matches!(
+        SpdSolver::new(&a),
+        Err(LinalgError::NotPositiveDefinite { .. })
+    ));
+    // refactor with an indefinite matrix fails but keeps the previous factor usable
+    let lap = laplacian_1d(10);
+    let mut s = SpdSolver::new(&lap).unwrap();
+    assert!(matches!(
+        s.refactor(&a),
+        Err(LinalgError::NotPositiveDefinite { .. })
+    ));
+    let b = vec![1.0; 10];
+    assert!(relative_residual(&lap, &s.solve(&b), &b) < tol::RESIDUAL);
+}
+
+#[test]
+fn lu_solver_on_indefinite_and_unsymmetric_and_singular() {
+    let mut rng = Rng(3);
+    let n = 200;
+    let spd = random_spd(n, 3, 1.0, &mut rng);
+    // A − 3 I is indefinite (diagonal dominance margin 1), and add an unsymmetric part.
+    let mut t: Vec<_> = spd.triplets().collect();
+    for i in 0..n {
+        t.push((i, i, -3.0 * (1.0 + (i % 3) as f64)));
+        t.push(((i * 7) % n, i, 0.3));
+    }
+    let a = SparseMatrix::from_triplets(n, n, &t).unwrap();
+    let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    let lu = LuSolver::new(&a).unwrap();
+    let x = lu.solve(&b);
+    assert!(relative_residual(&a, &x, &b) < 1e-10);
+    // singular: two equal rows
+    let s = SparseMatrix::from_triplets(
+        3,
+        3,
+        &[
+            (0, 0, 1.0),
+            (0, 1, 2.0),
+            (1, 0, 1.0),
+            (1, 1, 2.0),
+            (2, 2, 1.0),
+        ],
+    )
+    .unwrap();
+    assert!(matches!(
+        LuSolver::new(&s),
+        Err(LinalgError::Singular { .. })
+    ));
+}
+
+#[test]
+fn dense_solvers() {
+    let mut rng = Rng(11);
+    let n = 12;
+    let b0 = random_dense(n, n, &mut rng);
+    let spd = DenseMatrix::from_fn(n, n, |i, j| {
+        (0..n).map(|k| b0[(k, i)] * b0[(k, j)]).sum::<f64>() + if i == j { 1.0 } else { 0.0 }
+    });
+    let rhs: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    let check = |a: &DenseMatrix, x: &[f64]| {
+        let ax = a.mul_vec(x);
+        norm(&ax.iter().zip(&rhs).map(|(p, q)| p - q).collect::<Vec<_>>()) / norm(&rhs)
+    };
+    assert!(check(&spd, &cholesky_solve_dense(&spd, &rhs).unwrap()) < tol::RESIDUAL);
+    assert!(check(&b0, &solve_dense(&b0, &rhs).unwrap()) < 1e-11);
+    let neg = DenseMatrix::from_fn(n, n, |i, j| -spd[(i, j)]);
+    assert!(matches!(
+        cholesky_solve_dense(&neg, &rhs),
+        Err(LinalgError::NotPositiveDefinite { .. })
+    ));
+    let sing = DenseMatrix::from_row_major(2, 2, vec![1.0, 2.0, 2.0, 4.0]);
+    assert!(matches!(
+        solve_dense(&sing, &[1.0, 2.0]),
+        Err(LinalgError::Singular { .. })
+    ));
+    assert!(matches!(
+        solve_dense(&sing, &[1.0]),
+        Err(LinalgError::DimensionMismatch { .. })
+    ));
+}
+
+// ---------------------------------------------------------------- eigenproblems
+
+#[test]
+fn symmetric_eigen_of_laplacian_is_analytic() {
+    let n = 30;
+    let a = laplacian_1d(n).to_dense();
+    let e = symmetric_eigen(&a).unwrap();
+    for k in 0..n {
+        assert!((e.values[k] - laplacian_eigenvalue(n, k + 1)).abs() < tol::EIGENVALUE);
+    }
+    let q = &e.vectors;
+    assert!(max_diff(&q.transpose().matmul(q), &DenseMatrix::identity(n)) < tol::ORTHONORMAL);
+    let aq = a.matmul(q);
+    let ql = DenseMatrix::from_fn(n, n, |i, j| q[(i, j)] * e.values[j]);
+    assert!(max_diff(&aq, &ql) < tol::ORTHONORMAL);
+}
+
+/// K = tridiag(−1, 2, −1), M = tridiag(1, 4, 1)/6 (linear finite elements on a unit-spacing
+/// string): shared eigenvectors sin(ikθ), λ_k = (2 − 2cos θ_k) / ((4 + 2cos θ_k)/6).
+fn fe_string(n: usize) -> (SparseMatrix, SparseMatrix, Vec<f64>) {
+    let k = laplacian_1d(n);
+    let mut t = Vec::new();
+    for i in 0..n {
+        t.push((i, i, 4.0 / 6.0));
+        if i + 1 < n {
+            t.push((i, i + 1, 1.0 / 6.0));
+            t.push((i + 1, i, 1.0 / 6.0));
+        }
+    }
+    let m = SparseMatrix::from_triplets(n, n, &t).unwrap();
+    let exact = (1..=n)
+        .map(|j| {
+            let c = ((j as f64) * std::f64::consts::PI / (n as f64 + 1.0)).cos();
+            (2.0 - 2.0 * c) / ((4.0 + 2.0 * c) / 6.0)
+        })
+        .collect();
+    (k, m, exact)
+}
+
+#[test]
+fn generalized_eigen_dense_is_analytic_and_m_orthonormal() {
+    let n = 25;
+    let (k, m, exact) = fe_string(n);
+    let (kd, md) = (k.to_dense(), m.to_dense());
+    let e = generalized_symmetric_eigen(&kd, &md).unwrap();
+    for j in 0..n {
+        assert!(
+            (e.values[j] - exact[j]).abs() < tol::EIGENVALUE * exact[j].max(1.0),
+            "{j}"
+        );
+    }
+    let phi = &e.vectors;
+    assert!(
+        max_diff(
+            &phi.transpose().matmul(&md).matmul(phi),
+            &DenseMatrix::identity(n)
+        ) < tol::ORTHONORMAL
+    );
+    let kphi = kd.matmul(phi);
+    let mphi = md.matmul(phi);
+    for j in 0..n {
+        let r: f64 = (0..n)
+            .map(|i| (kphi[(i, j)] - e.values[j] * mphi[(i, j)]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(r < tol::EIGENVECTOR_RESIDUAL * e.values[j]);
+    }
+    let bad_m = DenseMatrix::from_fn(n, n, |i, j| -md[(i, j)]);
+    assert!(matches!(
+        generalized_symmetric_eigen(&kd, &bad_m),
+        Err(LinalgError::NotPositiveDefinite { .. })
+    ));
+}
+
+fn check_sparse_modes(k: &SparseMatrix, m: &SparseMatrix, e: &SymmetricEigen, reference: &[f64]) {
+    let n = k.nrows();
+    assert_eq!(e.values.len(), reference.len());
+    for (j, (got, want)) in e.values.iter().zip(reference).enumerate() {
+        assert!(
+            (got - want).abs() < tol::EIGENVALUE * want.abs().max(1.0),
+            "mode {j}: {got} vs {want}"
+        );
+    }
+    let phi = &e.vectors;
+    let gram = phi.transpose().matmul(&m.to_dense()).matmul(phi);
+    assert!(max_diff(&gram, &DenseMatrix::identity(phi.ncols())) < tol::ORTHONORMAL);
+    let (mut kx, mut mx) = (vec![0.0; n], vec![0.0; n]);
+    for j in 0..phi.ncols() {
+        let x = phi.column(j);
+        k.mul_vec(&x, &mut kx);
+        m.mul_vec(&x, &mut mx);
+        let r: Vec<f64> = kx
+            .iter()
+            .zip(&mx)
+            .map(|(a, b)| a - e.values[j] * b)
+            .collect();
+        assert!(
+            norm(&r) < tol::EIGENVECTOR_RESIDUAL * e.values[j].abs().max(1e-3) * norm(&mx),
+            "mode {j}"
+        );
+    }
+}
+
+#[test]
+fn sparse_lanczos_lowest_modes_agree_with_dense() {
+    let n = 300;
+    let (k, m, exact) = fe_string(n);
+    let e = generalized_eigen_sparse_lowest(&k, &m, 6, 0.0).unwrap();
+    check_sparse_modes(&k, &m, &e, &exact[..6]);
+    // A random SPD pencil with diagonal M, against dense.
+    let mut rng = Rng(5);
+    let n = 120;
+    let k2 = random_spd(n, 3, 0.1, &mut rng);
+    let md: Vec<f64> = (0..n).map(|_| 1.5 + rng.next()).collect();
+    let m2 = SparseMatrix::from_diagonal(&md);
+    let dense = generalized_symmetric_eigen(&k2.to_dense(), &m2.to_dense()).unwrap();
+    let e2 = generalized_eigen_sparse_lowest(&k2, &m2, 8, 0.0).unwrap();
+    check_sparse_modes(&k2, &m2, &e2, &dense.values[..8]);
+    // Shift inside the spectrum: the 5 eigenvalues just above σ (LU branch).
+    let sigma = 0.5 * (dense.values[20] + dense.values[21]);
+    let e3 = generalized_eigen_sparse_lowest(&k2, &m2, 5, sigma).unwrap();
+    check_sparse_modes(&k2, &m2, &e3, &dense.values[21..26]);
+}
+
+#[test]
+fn sparse_lanczos_finds_threefold_eigenvalues_of_kron_identity() {
+    // S ⊗ I₃ like constant-weight D-NURBS: every eigenvalue has multiplicity 3.
+    let ns = 40;
+    let (k, m, exact) = fe_string(ns);
+    let (k3, m3) = (k.kron_identity(3), m.kron_identity(3));
+    let e = generalized_eigen_sparse_lowest(&k3, &m3, 7, 0.0).unwrap();
+    let reference: Vec<f64> = (0..7).map(|j| exact[j / 3]).collect();
+    check_sparse_modes(&k3, &m3, &e, &reference);
+    // Singular K (free chain: rigid translation) with a small negative shift finds λ = 0.
+    let mut t: Vec<_> = laplacian_1d(10).triplets().collect();
+    t.retain(|&(i, j, _)| !(i == j && (i == 0 || i == 9)));
+    t.push((0, 0, 1.0));
+    t.push((9, 9, 1.0));
+    let free = SparseMatrix::from_triplets(10, 10, &t).unwrap();
+    let e = generalized_eigen_sparse_lowest(&free, &SparseMatrix::identity(10), 2, -0.1).unwrap();
+    assert!(e.values[0].abs() < 1e-12);
+    let exact_free = 2.0 - 2.0 * (std::f64::consts::PI / 10.0).cos();
+    assert!((e.values[1] - exact_free).abs() < tol::EIGENVALUE);
+}
+
+#[test]
+fn largest_eigenvalue_agrees_with_dense_and_analytic() {
+    let n = 200;
+    let k = laplacian_1d(n);
+    let lmax = largest_generalized_eigenvalue(&k, &SparseMatrix::identity(n), 1e-10).unwrap();
+    assert!((lmax - laplacian_eigenvalue(n, n)).abs() < 1e-8 * lmax);
+    let (k, m, exact) = fe_string(150);
+    let lmax = largest_generalized_eigenvalue(&k, &m, 1e-10).unwrap();
+    assert!((lmax - exact[149]).abs() < 1e-8 * lmax);
+    let mut rng = Rng(9);
+    let n = 150;
+    let k2 = random_spd(n, 3, 0.1, &mut rng);
+    let md: Vec<f64> = (0..n).map(|_| 1.5 + rng.next()).collect();
+    let dense = generalized_symmetric_eigen(
+        &k2.to_dense(),
+        &DenseMatrix::from_fn(n, n, |i, j| if i == j { md[i] } else { 0.0 }),
+    )
+    .unwrap();
+    let l = largest_generalized_eigenvalue(&k2, &SparseMatrix::from_diagonal(&md), 1e-10).unwrap();
+    assert!((l - dense.values[n - 1]).abs() < 1e-8 * l);
+    // 2D Laplacian on a 40×40 grid (n = 1600 > the 400 Lanczos vectors kept): clustered top
+    // spectrum; the result must be accurate and not below λ_max (it sets a stability limit).
+    let g = 40;
+    let l1 = laplacian_1d(g);
+    let eye = SparseMatrix::identity(g);
+    let kron = |a: &SparseMatrix, b: &SparseMatrix| {
+        let mut t = Vec::new();
+        for (i, j, v) in a.triplets() {
+            for (p, q, w) in b.triplets() {
+                t.push((i * g + p, j * g + q, v * w));
+            }
+        }
+        SparseMatrix::from_triplets(g * g, g * g, &t).unwrap()
+    };
+    let k2d =
+        SparseMatrix::linear_combination(1.0, &kron(&l1, &eye), 1.0, &kron(&eye, &l1)).unwrap();
+    let exact = 2.0 * laplacian_eigenvalue(g, g);
+    let l = largest_generalized_eigenvalue(&k2d, &SparseMatrix::identity(g * g), 1e-8).unwrap();
+    assert!(
+        l >= exact * (1.0 - 1e-12) && l <= exact * (1.0 + 1e-6),
+        "{l} vs {exact}"
+    );
+    // An unreachable tolerance takes the budget-exhausted path: still a conservative estimate,
+    // within the Gershgorin bound 8.
+    // (1D Laplacian, n = 2000: relative gap at the top ~ 1e-6, far too slow for 400 vectors).
+    let big = 2000;
+    let exact = laplacian_eigenvalue(big, big);
+    let l = largest_generalized_eigenvalue(
+        &laplacian_1d(big),
+        &SparseMatrix::from_diagonal(&vec![1.0; big]),
+        1e-13,
+    )
+    .unwrap();
+    assert!(l >= exact * (1.0 - 1e-12) && l <= 4.0, "{l} vs {exact}");
+    assert_eq!(
+        largest_generalized_eigenvalue(
+            &SparseMatrix::zeros(5, 5),
+            &SparseMatrix::identity(5),
+            1e-8
+        )
+        .unwrap(),
+        0.0
+    );
+    let bad = SparseMatrix::from_diagonal(&[1.0, -1.0]);
+    assert!(matches!(
+        largest_generalized_eigenvalue(&laplacian_1d(2), &bad, 1e-8),
+        Err(LinalgError::NotPositiveDefinite { .. })
+    ));
+}
+
+// ---------------------------------------------------------------- least squares
+
+#[test]
+fn least_squares_matches_normal_equations() {
+    let mut rng = Rng(21);
+    let (m, n) = (30, 6);
+    let a = random_dense(m, n, &mut rng);
+    let b: Vec<f64> = (0..m).map(|_| rng.next()).collect();
+    let x = least_squares(&a, &b).unwrap();
+    let ata = a.transpose().matmul(&a);
+    let atb = a.transpose().mul_vec(&b);
+    let xn = solve_dense(&ata, &atb).unwrap();
+    assert!(x.iter().zip(&xn).all(|(p, q)| (p - q).abs() < tol::LSTSQ));
+    // residual orthogonal to the columns
+    let r: Vec<f64> = a.mul_vec(&x).iter().zip(&b).map(|(p, q)| p - q).collect();
+    let atr = a.transpose().mul_vec(&r);
+    assert!(norm(&atr) < tol::LSTSQ * norm(&b));
+    // rank deficient: duplicated column
+    let def = DenseMatrix::from_fn(m, 3, |i, j| a[(i, j.min(1))]);
+    assert!(matches!(
+        least_squares(&def, &b),
+        Err(LinalgError::Singular { .. })
+    ));
+}
+
+#[test]
+fn nnls_with_active_constraint_satisfies_kkt() {
+    let mut rng = Rng(33);
+    let (m, n) = (20, 6);
+    let a = random_dense(m, n, &mut rng);
+    // b from a solution with negative parts so that some bounds are active.
+    let x_true = [1.0, -2.0, 0.5, -1.0, 2.0, 0.3];
+    let b = a.mul_vec(&x_true);
+    let x = nonnegative_least_squares(&a, &b).unwrap();
+    let r: Vec<f64> = b.iter().zip(a.mul_vec(&x)).map(|(p, q)| p - q).collect();
+    let w = a.transpose().mul_vec(&r); // −gradient of ½‖Ax − b‖²
+    let scale = a.frobenius_norm() * norm(&b);
+    let active = x.iter().filter(|&&v| v == 0.0).count();
+    assert!(active >= 1, "the test needs an active bound: {x:?}");
+    for j in 0..n {
+        assert!(x[j] >= 0.0);
+        if x[j] > 0.0 {
+            assert!(
+                w[j].abs() < tol::KKT * scale,
+                "stationarity on free variable {j}: {}",
+                w[j]
+            );
+        } else {
+            assert!(
+                w[j] < tol::KKT * scale,
+                "dual feasibility on bound {j}: {}",
+                w[j]
+            );
+        }
+    }
+    // Unconstrained optimum already non-negative: NNLS = least squares.
+    let x_pos = [1.0, 2.0, 0.5, 1.0, 2.0, 0.3];
+    let bp: Vec<f64> = a
+        .mul_vec(&x_pos)
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v + 1e-3 * ((i % 3) as f64 - 1.0))
+        .collect();
+    let xn = nonnegative_least_squares(&a, &bp).unwrap();
+    let xl = least_squares(&a, &bp).unwrap();
+    assert!(xn.iter().zip(&xl).all(|(p, q)| (p - q).abs() < tol::LSTSQ));
+}
+
+#[test]
+fn affine_solution_space_spans_all_solutions() {
+    let mut rng = Rng(77);
+    let (r, n) = (3, 7);
+    let a = random_dense(r, n, &mut rng);
+    let b: Vec<f64> = (0..r).map(|_| rng.next()).collect();
+    let (null, g) = affine_solution_space(&a, &b, 0.0).unwrap();
+    assert_eq!((null.nrows(), null.ncols()), (7, 4));
+    let ag = a.mul_vec(&g);
+    assert!(ag.iter().zip(&b).all(|(p, q)| (p - q).abs() < tol::LSTSQ));
+    assert!(a.matmul(&null).max_abs() < tol::LSTSQ);
+    assert!(
+        max_diff(&null.transpose().matmul(&null), &DenseMatrix::identity(4)) < tol::ORTHONORMAL
+    );
+    // Redundant consistent row: rank 3 of 4 rows; inconsistent right-hand side is an error.
+    let a2 = DenseMatrix::from_fn(4, n, |i, j| {
+        if i < 3 {
+            a[(i, j)]
+        } else {
+            a[(0, j)] + a[(1, j)]
+        }
+    });
+    let mut b2 = b.clone();
+    b2.push(b[0] + b[1]);
+    let (null2, _) = affine_solution_space(&a2, &b2, 1e-10).unwrap();
+    assert_eq!(null2.ncols(), 4);
+    b2[3] += 1.0;
+    assert!(matches!(
+        affine_solution_space(&a2, &b2, 1e-10),
+        Err(LinalgError::Singular { .. })
+    ));
+}

@@ -1,0 +1,136 @@
+#![allow(missing_docs)]
+//! Benchmarks of the mass-spring model (run: `cargo bench -p nurbspring-msm --bench step`).
+//!
+//! - `memory/*`: the machine's memory bandwidth (a 256 MiB f64 copy and sum), so that the
+//!   figures below can be set against it;
+//! - `msm/internal_force/256x256`: the spring forces of paper eq. (5) on a 256 × 256 lattice
+//!   with structural and shear springs (≈ 261k springs), f64;
+//! - `msm/symplectic_euler_step/256x256`: one step of `nurbspring-sim`'s symplectic Euler on
+//!   that lattice (forces, gravity and the update of q and v);
+//! - `msm/backward_euler_step/128x128`: one backward-Euler step (Newton on the sparse tangent
+//!   stiffness) on a 128 × 128 lattice.
+//!
+//! Criterion reports throughput in springs per second (the spring counts are printed first);
+//! ns per spring is its inverse.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_msm::{FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringLattice};
+use nurbspring_sim::{
+    DynamicModel, IntegratorKind, RunOptions, State, make_stepper, make_stepper_with_options,
+};
+
+/// A gently curved bilinear sheet, `n × n` nodes, spacing ≈ 1 / (n − 1), structural + shear
+/// springs, the two corners of the `v = 0` edge fixed, gravity on.
+fn sheet(n: usize) -> MsmModel {
+    let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+    let pts = vec![[0., 0., 0.], [0., 1., 0.1], [1., 0., 0.1], [1., 1., 0.]];
+    let surface = NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 4]).unwrap();
+    let options = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: n,
+            nodes_v: n,
+        },
+        k_edge: 1000.0,
+        k_diag: 500.0,
+        mass: 1.0 / (n * n) as f64,
+        fixed: FixedNodes::List(vec![0, (n - 1) * n]),
+        gravity: [0.0, 0.0, -9.81],
+        ..Default::default()
+    };
+    let lattice = SpringLattice::from_surface(&surface, &options, &[]).unwrap();
+    MsmModel::new(lattice).unwrap()
+}
+
+fn perturbed_state(model: &MsmModel) -> State {
+    let mut state = model.initial_state(&[]);
+    for (i, q) in state.q.iter_mut().enumerate() {
+        *q += 1e-4 * ((i as f64) * 0.7).sin();
+    }
+    state
+}
+
+fn memory(c: &mut Criterion) {
+    const LEN: usize = 32 << 20; // 32 Mi f64 = 256 MiB
+    let src: Vec<f64> = (0..LEN).map(|i| i as f64).collect();
+    let mut dst = vec![0.0; LEN];
+    let mut group = c.benchmark_group("memory");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(3));
+    group.throughput(Throughput::Bytes((2 * LEN * 8) as u64));
+    group.bench_function("copy_256MiB", |b| {
+        b.iter(|| {
+            dst.copy_from_slice(black_box(&src));
+            black_box(&dst);
+        })
+    });
+    group.throughput(Throughput::Bytes((LEN * 8) as u64));
+    group.bench_function("sum_256MiB", |b| {
+        b.iter(|| black_box(black_box(&src).iter().sum::<f64>()))
+    });
+    group.finish();
+}
+
+fn explicit(c: &mut Criterion) {
+    let model = sheet(256);
+    let springs = model.lattice().springs.len();
+    eprintln!(
+        "256 x 256 lattice: {springs} springs, {} free dofs",
+        model.n_dofs()
+    );
+    let state = perturbed_state(&model);
+    let mut out = vec![0.0; model.n_dofs()];
+    let mut group = c.benchmark_group("msm");
+    group
+        .sample_size(50)
+        .measurement_time(Duration::from_secs(3));
+    group.throughput(Throughput::Elements(springs as u64));
+    group.bench_function("internal_force/256x256", |b| {
+        b.iter(|| model.internal_force(black_box(&state.q), &mut out))
+    });
+    let dt = 1e-5;
+    let mut stepper = make_stepper(IntegratorKind::SymplecticEuler, &model, &state, dt).unwrap();
+    let mut s = state.clone();
+    group.bench_function("symplectic_euler_step/256x256", |b| {
+        b.iter(|| stepper.step(&model, &mut s, dt).unwrap())
+    });
+    group.finish();
+}
+
+fn implicit(c: &mut Criterion) {
+    let model = sheet(128);
+    let springs = model.lattice().springs.len();
+    eprintln!(
+        "128 x 128 lattice: {springs} springs, {} free dofs",
+        model.n_dofs()
+    );
+    let state = perturbed_state(&model);
+    let dt = 1e-3;
+    // Newton to 1e-8 relative: with k = 1000 and net forces far below the single spring
+    // forces, the residual's round-off floor on this lattice is ≈ 2e-10, above sim's default
+    // tolerance of 1e-10.
+    let mut opts = RunOptions::new(dt, 1.0, IntegratorKind::BackwardEuler);
+    opts.newton_tolerance = 1e-8;
+    let mut stepper =
+        make_stepper_with_options(IntegratorKind::BackwardEuler, &model, &state, &opts).unwrap();
+    let mut s = state.clone();
+    let mut group = c.benchmark_group("msm");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(5));
+    group.throughput(Throughput::Elements(springs as u64));
+    group.bench_function("backward_euler_step/128x128", |b| {
+        b.iter(|| stepper.step(&model, &mut s, dt).unwrap())
+    });
+    group.bench_function("tangent_stiffness/128x128", |b| {
+        b.iter(|| black_box(model.tangent_stiffness(black_box(&state.q))))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, memory, explicit, implicit);
+criterion_main!(benches);

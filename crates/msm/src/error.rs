@@ -1,0 +1,104 @@
+//! Errors of the mass-spring crate.
+
+use nurbspring_geom::GeomError;
+use nurbspring_linalg::LinalgError;
+use nurbspring_sim::SimError;
+
+/// Everything that can be wrong with a lattice or a mass-spring run. Messages carry the
+/// offending values.
+#[derive(Debug, thiserror::Error)]
+pub enum MsmError {
+    /// A spring whose end nodes coincide at the initial positions: its direction `d/|d|`
+    /// (paper eq. (5)) is undefined.
+    #[error("spring {spring} between nodes {a} and {b} has zero length at the initial positions")]
+    ZeroLengthSpring {
+        /// Spring index.
+        spring: usize,
+        /// First node.
+        a: usize,
+        /// Second node.
+        b: usize,
+    },
+    /// A spring naming a node that does not exist.
+    #[error("spring {spring} names node {node}, but the lattice has {n_nodes} nodes")]
+    MissingNode {
+        /// Spring index.
+        spring: usize,
+        /// The node named.
+        node: usize,
+        /// Number of nodes.
+        n_nodes: usize,
+    },
+    /// A node mass that is zero or negative.
+    #[error("node {node} has mass {mass}; masses must be positive")]
+    NonPositiveMass {
+        /// Node index.
+        node: usize,
+        /// The mass given.
+        mass: f64,
+    },
+    /// A spring constant below zero.
+    #[error("spring {spring} has stiffness k = {k}; spring constants must be ≥ 0")]
+    NegativeStiffness {
+        /// Spring index.
+        spring: usize,
+        /// The constant given.
+        k: f64,
+    },
+    /// A parameter outside its range (pre-strain ≥ 1, negative damping or rest length, a grid
+    /// with fewer than two nodes along a direction, …).
+    #[error("invalid {name}: {value}")]
+    InvalidParameter {
+        /// What the parameter is.
+        name: String,
+        /// The value given.
+        value: f64,
+    },
+    /// A NaN or infinite input value.
+    #[error("{what} {index} is not finite ({value})")]
+    NonFinite {
+        /// What kind of value ("node position", "spring stiffness", …).
+        what: &'static str,
+        /// Index of the node or spring (0 for global values).
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// Per-node arrays of different lengths.
+    #[error("{what}: expected {expected} entries (one per node), got {found}")]
+    LengthMismatch {
+        /// Which array.
+        what: &'static str,
+        /// Number of nodes.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// More nodes than [`crate::MAX_NODES`]; refused before allocating.
+    #[error(
+        "a lattice of {nodes} nodes is larger than the limit of {} nodes",
+        crate::MAX_NODES
+    )]
+    TooLarge {
+        /// Number of nodes requested (saturated at `usize::MAX`).
+        nodes: usize,
+    },
+    /// Geometry error (surface evaluation).
+    #[error(transparent)]
+    Geom(#[from] GeomError),
+    /// Linear algebra error.
+    #[error(transparent)]
+    Linalg(#[from] LinalgError),
+    /// Dynamics error.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// A lattice file that does not parse.
+    #[error("lattice JSON: {0}")]
+    Json(String),
+}
+
+impl From<serde_json::Error> for MsmError {
+    fn from(e: serde_json::Error) -> Self {
+        MsmError::Json(e.to_string())
+    }
+}

@@ -1,0 +1,746 @@
+//! Spring lattices: from a NURBS surface (SPEC §5, paper Figure 1 and eq. (19)) or from any
+//! node and spring lists.
+
+use nurbspring_geom::NurbsSurface;
+use nurbspring_linalg::SparseMatrix;
+
+use crate::spring::{node, sub};
+use crate::stiffness::Coefficient;
+use crate::topology::Topology;
+use crate::{MAX_NODES, MsmError, Spring, SpringKind};
+
+/// Where the lattice nodes sit in the parameter domain.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum ParameterGrid {
+    /// The distinct knot values of each direction (the paper's "u_i ∈ U"; default).
+    #[default]
+    Knots,
+    /// `nodes_u × nodes_v` uniformly spaced parameters, domain ends included (each ≥ 2).
+    Uniform {
+        /// Nodes along u.
+        nodes_u: usize,
+        /// Nodes along v.
+        nodes_v: usize,
+    },
+    /// The Greville abscissae of each direction (repeated values merged).
+    Greville,
+}
+
+/// Which nodes are fixed.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum FixedNodes {
+    /// SPEC §5: a node is fixed when every control point with a non-zero basis value at its
+    /// `(u, v)` is fixed (the fixed control points are given to [`SpringLattice::from_surface`]).
+    #[default]
+    Auto,
+    /// These node indices (`a = i · n_v + j`).
+    List(Vec<usize>),
+}
+
+/// How to build a lattice from a surface ([`SpringLattice::from_surface`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LatticeOptions {
+    /// Parameter grid of the nodes.
+    pub grid: ParameterGrid,
+    /// Structural springs between grid neighbours along u and v.
+    pub structural: bool,
+    /// Shear springs on both diagonals of each grid cell.
+    pub shear: bool,
+    /// Bending springs between second neighbours along u and v.
+    pub bending: bool,
+    /// Stiffness of structural springs (`k_edge`).
+    pub k_edge: f64,
+    /// Stiffness of shear springs (`k_diag`).
+    pub k_diag: f64,
+    /// Stiffness of bending springs (`k_bend`).
+    pub k_bend: f64,
+    /// Mass of every node.
+    pub mass: f64,
+    /// Damping factor `γ` of every node (force `−γ ẋ`, SPEC §5).
+    pub damping: f64,
+    /// Rest lengths are `(1 − pre_strain) ×` the initial lengths; `pre_strain > 0` puts the
+    /// lattice under tension (geometric stiffness), `< 0` under compression. Must be `< 1`.
+    pub pre_strain: f64,
+    /// Fixed nodes.
+    pub fixed: FixedNodes,
+    /// Gravity `g` (force `m_a g` on each node, paper eq. (6)).
+    pub gravity: [f64; 3],
+}
+
+impl Default for LatticeOptions {
+    /// Distinct knots, structural and shear springs with `k = 1`, mass 1, no damping, no
+    /// pre-strain, fixed nodes by the SPEC §5 rule, no gravity.
+    fn default() -> Self {
+        Self {
+            grid: ParameterGrid::Knots,
+            structural: true,
+            shear: true,
+            bending: false,
+            k_edge: 1.0,
+            k_diag: 1.0,
+            k_bend: 1.0,
+            mass: 1.0,
+            damping: 0.0,
+            pre_strain: 0.0,
+            fixed: FixedNodes::Auto,
+            gravity: [0.0; 3],
+        }
+    }
+}
+
+/// A mass-spring model (paper eqs. (5)–(7)): nodes with masses, damping and fixed flags, and
+/// springs between them.
+///
+/// Node positions are the initial (rest) positions. Generalized coordinates are interleaved
+/// `[x_0, y_0, z_0, x_1, …]` (SPEC §1); on a grid, node `a = i · n_v + j`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpringLattice {
+    /// Initial node positions.
+    pub positions: Vec<[f64; 3]>,
+    /// Node masses `m_a > 0`.
+    pub masses: Vec<f64>,
+    /// Node damping factors `γ_a ≥ 0`.
+    pub damping: Vec<f64>,
+    /// Fixed nodes (all three coordinates held at their initial values).
+    pub fixed: Vec<bool>,
+    /// The springs.
+    pub springs: Vec<Spring>,
+    /// `(u, v)` of each node when sampled from a surface.
+    pub params: Option<Vec<(f64, f64)>>,
+    /// `(n_u, n_v)` when the nodes form a grid, node `a = i · n_v + j`.
+    pub grid: Option<(usize, usize)>,
+    /// Gravity `g`.
+    pub gravity: [f64; 3],
+}
+
+/// Basis values below this count as zero in the SPEC §5 fixed-node rule (the Cox–de Boor
+/// recursion gives exact zeros at knots; this only absorbs round-off).
+const BASIS_ZERO: f64 = 1e-14;
+
+impl SpringLattice {
+    /// Nodes `x_ab = c(u_a, v_b)` on the parameter grid of `options` (paper eq. (19)), springs
+    /// by kind (SPEC §5), rest lengths `(1 − pre_strain) ×` the initial lengths. With
+    /// [`FixedNodes::Auto`] a node is fixed when every control point with a non-zero basis
+    /// value at its `(u, v)` is in `fixed_control_points` (flat indices `k = i · n_v + j`).
+    ///
+    /// ```
+    /// use nurbspring_geom::{KnotVector, NurbsSurface};
+    /// use nurbspring_msm::{LatticeOptions, ParameterGrid, SpringLattice};
+    /// let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+    /// let s = NurbsSurface::try_new(k.clone(), k, vec![[0., 0., 0.], [0., 1., 0.], [1., 0., 0.], [1., 1., 0.]], vec![1.; 4]).unwrap();
+    /// let opts = LatticeOptions { grid: ParameterGrid::Uniform { nodes_u: 3, nodes_v: 3 }, ..Default::default() };
+    /// let lattice = SpringLattice::from_surface(&s, &opts, &[]).unwrap();
+    /// // 12 structural springs and 8 shear springs on a 3 × 3 grid.
+    /// assert_eq!((lattice.n_nodes(), lattice.springs.len()), (9, 20));
+    /// ```
+    pub fn from_surface(
+        surface: &NurbsSurface,
+        options: &LatticeOptions,
+        fixed_control_points: &[usize],
+    ) -> Result<Self, MsmError> {
+        validate_options(options)?;
+        let (us, vs) = grid_parameters(surface, &options.grid)?;
+        let (n_u, n_v) = (us.len(), vs.len());
+        let n = n_u.saturating_mul(n_v);
+        if n > MAX_NODES {
+            return Err(MsmError::TooLarge { nodes: n });
+        }
+        let positions = surface.grid(&us, &vs)?;
+        let params: Vec<(f64, f64)> = us
+            .iter()
+            .flat_map(|&u| vs.iter().map(move |&v| (u, v)))
+            .collect();
+        let fixed = match &options.fixed {
+            FixedNodes::Auto => auto_fixed(surface, &us, &vs, fixed_control_points)?,
+            FixedNodes::List(list) => {
+                let mut fixed = vec![false; n];
+                for &a in list {
+                    if a >= n {
+                        return Err(MsmError::InvalidParameter {
+                            name: format!("fixed node index (the lattice has {n} nodes)"),
+                            value: a as f64,
+                        });
+                    }
+                    fixed[a] = true;
+                }
+                fixed
+            }
+        };
+        let springs = grid_springs(n_u, n_v, options, &positions);
+        let lattice = Self {
+            positions,
+            masses: vec![options.mass; n],
+            damping: vec![options.damping; n],
+            fixed,
+            springs,
+            params: Some(params),
+            grid: Some((n_u, n_v)),
+            gravity: options.gravity,
+        };
+        lattice.validate()?;
+        Ok(lattice)
+    }
+
+    /// A lattice from any node and spring lists, validated (see [`SpringLattice::validate`]).
+    pub fn from_parts(
+        positions: Vec<[f64; 3]>,
+        masses: Vec<f64>,
+        damping: Vec<f64>,
+        fixed: Vec<bool>,
+        springs: Vec<Spring>,
+        gravity: [f64; 3],
+    ) -> Result<Self, MsmError> {
+        if positions.len() > MAX_NODES {
+            return Err(MsmError::TooLarge {
+                nodes: positions.len(),
+            });
+        }
+        let lattice = Self {
+            positions,
+            masses,
+            damping,
+            fixed,
+            springs,
+            params: None,
+            grid: None,
+            gravity,
+        };
+        lattice.validate()?;
+        Ok(lattice)
+    }
+
+    /// Checks the invariants every computation relies on: at least one and at most
+    /// [`MAX_NODES`] nodes, per-node arrays of one length, finite positions and gravity,
+    /// masses `> 0`, damping `≥ 0`, springs naming existing nodes, `k ≥ 0`, rest length `≥ 0`,
+    /// every value finite, and no spring of zero length at the initial positions. Also
+    /// `params` and `grid`, when present, must match the number of nodes.
+    pub fn validate(&self) -> Result<(), MsmError> {
+        let n = self.positions.len();
+        if n > MAX_NODES {
+            return Err(MsmError::TooLarge { nodes: n });
+        }
+        if n == 0 {
+            return Err(MsmError::InvalidParameter {
+                name: "number of nodes".into(),
+                value: 0.0,
+            });
+        }
+        for (what, len) in [
+            ("masses", self.masses.len()),
+            ("damping", self.damping.len()),
+            ("fixed", self.fixed.len()),
+        ] {
+            if len != n {
+                return Err(MsmError::LengthMismatch {
+                    what,
+                    expected: n,
+                    found: len,
+                });
+            }
+        }
+        if let Some(p) = &self.params
+            && p.len() != n
+        {
+            return Err(MsmError::LengthMismatch {
+                what: "params",
+                expected: n,
+                found: p.len(),
+            });
+        }
+        if let Some((n_u, n_v)) = self.grid
+            && n_u.checked_mul(n_v) != Some(n)
+        {
+            return Err(MsmError::LengthMismatch {
+                what: "grid n_u × n_v",
+                expected: n,
+                found: n_u.saturating_mul(n_v),
+            });
+        }
+        for (a, x) in self.positions.iter().enumerate() {
+            if let Some(&v) = x.iter().find(|v| !v.is_finite()) {
+                return Err(MsmError::NonFinite {
+                    what: "position of node",
+                    index: a,
+                    value: v,
+                });
+            }
+        }
+        for (a, &m) in self.masses.iter().enumerate() {
+            if m.is_nan() || m.is_infinite() {
+                return Err(MsmError::NonFinite {
+                    what: "mass of node",
+                    index: a,
+                    value: m,
+                });
+            }
+            if m <= 0.0 {
+                return Err(MsmError::NonPositiveMass { node: a, mass: m });
+            }
+        }
+        for (a, &g) in self.damping.iter().enumerate() {
+            if !g.is_finite() {
+                return Err(MsmError::NonFinite {
+                    what: "damping of node",
+                    index: a,
+                    value: g,
+                });
+            }
+            if g < 0.0 {
+                return Err(MsmError::InvalidParameter {
+                    name: format!("damping of node {a} (must be ≥ 0)"),
+                    value: g,
+                });
+            }
+        }
+        if let Some(&g) = self.gravity.iter().find(|g| !g.is_finite()) {
+            return Err(MsmError::NonFinite {
+                what: "gravity component",
+                index: 0,
+                value: g,
+            });
+        }
+        for (s, spring) in self.springs.iter().enumerate() {
+            for node in [spring.a, spring.b] {
+                if node >= n {
+                    return Err(MsmError::MissingNode {
+                        spring: s,
+                        node,
+                        n_nodes: n,
+                    });
+                }
+            }
+            if !spring.k.is_finite() {
+                return Err(MsmError::NonFinite {
+                    what: "stiffness of spring",
+                    index: s,
+                    value: spring.k,
+                });
+            }
+            if spring.k < 0.0 {
+                return Err(MsmError::NegativeStiffness {
+                    spring: s,
+                    k: spring.k,
+                });
+            }
+            if !spring.rest_length.is_finite() {
+                return Err(MsmError::NonFinite {
+                    what: "rest length of spring",
+                    index: s,
+                    value: spring.rest_length,
+                });
+            }
+            if spring.rest_length < 0.0 {
+                return Err(MsmError::InvalidParameter {
+                    name: format!("rest length of spring {s} (must be ≥ 0)"),
+                    value: spring.rest_length,
+                });
+            }
+            let d = sub(self.positions[spring.a], self.positions[spring.b]);
+            if d == [0.0; 3] {
+                return Err(MsmError::ZeroLengthSpring {
+                    spring: s,
+                    a: spring.a,
+                    b: spring.b,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of nodes N.
+    pub fn n_nodes(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of coordinates, `3 N`.
+    pub fn n_dofs(&self) -> usize {
+        3 * self.positions.len()
+    }
+
+    /// The spring kinds with at least one spring, in [`SpringKind::ALL`] order.
+    pub fn kinds_present(&self) -> Vec<SpringKind> {
+        SpringKind::ALL
+            .into_iter()
+            .filter(|&kind| self.springs.iter().any(|s| s.kind == kind))
+            .collect()
+    }
+
+    /// Number of springs of a kind.
+    pub fn count(&self, kind: SpringKind) -> usize {
+        self.springs.iter().filter(|s| s.kind == kind).count()
+    }
+
+    /// Sets the stiffness of every spring of `kind` (not validated here; [`crate::MsmModel::new`]
+    /// validates).
+    pub fn set_stiffness(&mut self, kind: SpringKind, k: f64) {
+        for s in self.springs.iter_mut().filter(|s| s.kind == kind) {
+            s.k = k;
+        }
+    }
+
+    /// Sets every node mass to `m` (not validated here).
+    pub fn set_mass(&mut self, m: f64) {
+        self.masses.fill(m);
+    }
+
+    /// Sets one mass per node, validated (length, `> 0`, finite).
+    pub fn set_masses(&mut self, masses: Vec<f64>) -> Result<(), MsmError> {
+        let old = std::mem::replace(&mut self.masses, masses);
+        if let Err(e) = self.validate() {
+            self.masses = old;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Sets every node's damping factor `γ` (force `−γ ẋ`, SPEC §5; not validated here).
+    pub fn set_damping(&mut self, gamma: f64) {
+        self.damping.fill(gamma);
+    }
+
+    /// The node nearest to parameter `(u, v)`: by parameter distance when `params` exist; else,
+    /// on a grid, node `(round(u (n_u − 1)), round(v (n_v − 1)))` for `u, v ∈ [0, 1]`; else the
+    /// node nearest in the x-y plane to the point at fractions `(u, v)` of the nodes'
+    /// bounding box. Ties go to the lower index.
+    pub fn node_nearest(&self, u: f64, v: f64) -> usize {
+        if let Some(params) = &self.params {
+            return argmin(
+                params
+                    .iter()
+                    .map(|&(pu, pv)| (pu - u).powi(2) + (pv - v).powi(2)),
+            );
+        }
+        if let Some((n_u, n_v)) = self.grid {
+            let i = (u.clamp(0.0, 1.0) * (n_u - 1) as f64).round() as usize;
+            let j = (v.clamp(0.0, 1.0) * (n_v - 1) as f64).round() as usize;
+            return i.min(n_u - 1) * n_v + j.min(n_v - 1);
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for x in &self.positions {
+            for c in 0..2 {
+                lo[c] = lo[c].min(x[c]);
+                hi[c] = hi[c].max(x[c]);
+            }
+        }
+        let target = [lo[0] + u * (hi[0] - lo[0]), lo[1] + v * (hi[1] - lo[1])];
+        argmin(
+            self.positions
+                .iter()
+                .map(|x| (x[0] - target[0]).powi(2) + (x[1] - target[1]).powi(2)),
+        )
+    }
+
+    /// Indices of the fixed nodes, ascending.
+    pub fn fixed_nodes(&self) -> Vec<usize> {
+        (0..self.n_nodes()).filter(|&a| self.fixed[a]).collect()
+    }
+
+    /// The fixed coordinates `3a, 3a + 1, 3a + 2` of every fixed node `a`, ascending.
+    pub fn fixed_dofs(&self) -> Vec<usize> {
+        self.fixed_nodes()
+            .into_iter()
+            .flat_map(|a| [3 * a, 3 * a + 1, 3 * a + 2])
+            .collect()
+    }
+
+    /// Initial positions as one interleaved vector `[x_0, y_0, z_0, x_1, …]`.
+    pub fn flat_positions(&self) -> Vec<f64> {
+        self.positions.iter().flatten().copied().collect()
+    }
+
+    /// Gravity forces `m_a g` (paper eq. (6)), full `3N` vector.
+    pub fn gravity_forces(&self) -> Vec<f64> {
+        self.masses
+            .iter()
+            .flat_map(|&m| self.gravity.map(|g| m * g))
+            .collect()
+    }
+
+    /// The elastic forces of paper eq. (5) summed per node at positions `x` (length `3N`,
+    /// interleaved) into `out` (overwritten): `f_a = Σ_b k (l − |d|) d/|d|`, `d = x_a − x_b`.
+    /// This is the restoring force `−∇E`. Panics when a length is not `3N`.
+    ///
+    /// ```
+    /// use nurbspring_msm::{Spring, SpringKind, SpringLattice};
+    /// let s = Spring { a: 0, b: 1, kind: SpringKind::Structural, k: 4.0, rest_length: 1.0 };
+    /// let lattice = SpringLattice::from_parts(vec![[0.; 3], [1., 0., 0.]], vec![1.; 2], vec![0.; 2], vec![false; 2], vec![s], [0.; 3]).unwrap();
+    /// let mut f = vec![0.0; 6];
+    /// lattice.elastic_forces(&[0., 0., 0., 1.5, 0., 0.], &mut f);  // stretched by 0.5
+    /// assert_eq!(f, vec![2., 0., 0., -2., 0., 0.]);
+    /// ```
+    pub fn elastic_forces(&self, x: &[f64], out: &mut [f64]) {
+        let n3 = self.n_dofs();
+        assert_eq!(x.len(), n3, "positions: expected {n3} entries");
+        assert_eq!(out.len(), n3, "forces: expected {n3} entries");
+        out.fill(0.0);
+        for s in &self.springs {
+            let f = s.force_on_a(x);
+            for c in 0..3 {
+                out[3 * s.a + c] += f[c];
+                out[3 * s.b + c] -= f[c];
+            }
+        }
+    }
+
+    /// Elastic energy `E = Σ k (|d| − l)² / 2` at positions `x` (SPEC §5). Panics when
+    /// `x.len() ≠ 3N`.
+    pub fn elastic_energy(&self, x: &[f64]) -> f64 {
+        assert_eq!(
+            x.len(),
+            self.n_dofs(),
+            "positions: expected {} entries",
+            self.n_dofs()
+        );
+        self.springs.iter().map(|s| s.energy(x)).sum()
+    }
+
+    /// The tangent stiffness `K_T = −∂f_elastic/∂x` at `x`, full `3N × 3N` (paper eqs. (9)–(10),
+    /// SPEC §5): for each spring the block `B = k [ (l/|d|) n nᵀ + (1 − l/|d|) I ]` enters
+    /// `(a, a)`, `(b, b)` with `+` and `(a, b)`, `(b, a)` with `−`. The pattern holds a full
+    /// 3 × 3 block for every node and every pair joined by a spring (explicit zeros kept), the
+    /// same at every `x`. Panics when `x.len() ≠ 3N`.
+    pub fn tangent_stiffness(&self, x: &[f64]) -> SparseMatrix {
+        assert_eq!(
+            x.len(),
+            self.n_dofs(),
+            "positions: expected {} entries",
+            self.n_dofs()
+        );
+        let topology = Topology::all_nodes(self);
+        let pattern = topology.pattern();
+        let mut k = pattern.template.clone();
+        topology.fill(&pattern, x, &Coefficient::Stiffness, k.values_mut());
+        k
+    }
+
+    /// The unit-stiffness matrix `G_c` of one spring class at `x`: the tangent stiffness of the
+    /// springs of `kind` with `k = 1` (the geometric term included; both terms of eq. (9) are
+    /// proportional to `k`). When every spring of class `c` has stiffness `k_c`,
+    /// `K_T = Σ_c k_c G_c` (SPEC §5). Same pattern as [`SpringLattice::tangent_stiffness`].
+    pub fn unit_stiffness(&self, kind: SpringKind, x: &[f64]) -> SparseMatrix {
+        assert_eq!(
+            x.len(),
+            self.n_dofs(),
+            "positions: expected {} entries",
+            self.n_dofs()
+        );
+        let topology = Topology::all_nodes(self);
+        let pattern = topology.pattern();
+        let mut g = pattern.template.clone();
+        topology.fill(&pattern, x, &Coefficient::Unit(kind), g.values_mut());
+        g
+    }
+
+    /// Current spring lengths at `x`.
+    pub fn spring_lengths(&self, x: &[f64]) -> Vec<f64> {
+        self.springs.iter().map(|s| s.length(x)).collect()
+    }
+
+    /// Position of node `a` in an interleaved vector `x`.
+    pub fn node_position(x: &[f64], a: usize) -> [f64; 3] {
+        node(x, a)
+    }
+}
+
+fn argmin(values: impl Iterator<Item = f64>) -> usize {
+    let mut best = (0, f64::INFINITY);
+    for (i, d) in values.enumerate() {
+        if d < best.1 {
+            best = (i, d);
+        }
+    }
+    best.0
+}
+
+fn validate_options(o: &LatticeOptions) -> Result<(), MsmError> {
+    for (name, k) in [
+        ("k_edge", o.k_edge),
+        ("k_diag", o.k_diag),
+        ("k_bend", o.k_bend),
+    ] {
+        if !(k.is_finite() && k >= 0.0) {
+            return Err(MsmError::InvalidParameter {
+                name: format!("{name} (must be finite and ≥ 0)"),
+                value: k,
+            });
+        }
+    }
+    if !(o.mass.is_finite() && o.mass > 0.0) {
+        return Err(MsmError::NonPositiveMass {
+            node: 0,
+            mass: o.mass,
+        });
+    }
+    if !(o.damping.is_finite() && o.damping >= 0.0) {
+        return Err(MsmError::InvalidParameter {
+            name: "damping (must be finite and ≥ 0)".into(),
+            value: o.damping,
+        });
+    }
+    if !(o.pre_strain.is_finite() && o.pre_strain < 1.0) {
+        return Err(MsmError::InvalidParameter {
+            name: "pre_strain (must be finite and < 1)".into(),
+            value: o.pre_strain,
+        });
+    }
+    if let Some(&g) = o.gravity.iter().find(|g| !g.is_finite()) {
+        return Err(MsmError::NonFinite {
+            what: "gravity component",
+            index: 0,
+            value: g,
+        });
+    }
+    Ok(())
+}
+
+/// The node parameters along u and v.
+fn grid_parameters(
+    surface: &NurbsSurface,
+    grid: &ParameterGrid,
+) -> Result<(Vec<f64>, Vec<f64>), MsmError> {
+    let ku = surface.basis_u().knots();
+    let kv = surface.basis_v().knots();
+    Ok(match *grid {
+        ParameterGrid::Knots => (ku.distinct(), kv.distinct()),
+        ParameterGrid::Greville => {
+            let mut us = ku.greville();
+            let mut vs = kv.greville();
+            us.dedup();
+            vs.dedup();
+            (us, vs)
+        }
+        ParameterGrid::Uniform { nodes_u, nodes_v } => {
+            for (name, n) in [("nodes_u", nodes_u), ("nodes_v", nodes_v)] {
+                if n < 2 {
+                    return Err(MsmError::InvalidParameter {
+                        name: format!("{name} of a uniform grid (must be ≥ 2)"),
+                        value: n as f64,
+                    });
+                }
+            }
+            let total = nodes_u.saturating_mul(nodes_v);
+            if total > MAX_NODES {
+                return Err(MsmError::TooLarge { nodes: total });
+            }
+            let ((u0, u1), (v0, v1)) = surface.domain();
+            (
+                nurbspring_geom::linspace(u0, u1, nodes_u),
+                nurbspring_geom::linspace(v0, v1, nodes_v),
+            )
+        }
+    })
+}
+
+/// SPEC §5 fixed rule on a tensor grid: node `(i, j)` is fixed when every control point
+/// `(k, l)` with `N_k(u_i) ≠ 0` and `N_l(v_j) ≠ 0` is fixed (weights are positive, so the
+/// rational basis value `R_kl` is non-zero exactly when `N_k N_l` is).
+fn auto_fixed(
+    surface: &NurbsSurface,
+    us: &[f64],
+    vs: &[f64],
+    fixed_control_points: &[usize],
+) -> Result<Vec<bool>, MsmError> {
+    let n = us.len() * vs.len();
+    if fixed_control_points.is_empty() {
+        return Ok(vec![false; n]);
+    }
+    let n_cp = surface.n_control_points();
+    let mut cp_fixed = vec![false; n_cp];
+    for &k in fixed_control_points {
+        if k >= n_cp {
+            return Err(MsmError::InvalidParameter {
+                name: format!("fixed control point index (the surface has {n_cp} control points)"),
+                value: k as f64,
+            });
+        }
+        cp_fixed[k] = true;
+    }
+    let support = |basis: &nurbspring_geom::BSplineBasis, t: f64| -> Result<Vec<usize>, MsmError> {
+        let (span, values) = basis.values(t)?;
+        let p = basis.degree();
+        Ok(values
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.abs() > BASIS_ZERO)
+            .map(|(a, _)| span - p + a)
+            .collect())
+    };
+    let su: Vec<Vec<usize>> = us
+        .iter()
+        .map(|&u| support(surface.basis_u(), u))
+        .collect::<Result<_, _>>()?;
+    let sv: Vec<Vec<usize>> = vs
+        .iter()
+        .map(|&v| support(surface.basis_v(), v))
+        .collect::<Result<_, _>>()?;
+    let n_v_cp = surface.n_v();
+    let mut fixed = Vec::with_capacity(n);
+    for ku in &su {
+        for kv in &sv {
+            fixed.push(
+                ku.iter()
+                    .all(|&k| kv.iter().all(|&l| cp_fixed[k * n_v_cp + l])),
+            );
+        }
+    }
+    Ok(fixed)
+}
+
+/// Springs on an `n_u × n_v` grid: structural `(i, j)–(i, j+1)` and `(i, j)–(i+1, j)`, then
+/// shear `(i, j)–(i+1, j+1)` and `(i+1, j)–(i, j+1)`, then bending `(i, j)–(i, j+2)` and
+/// `(i, j)–(i+2, j)`; each group in node order.
+fn grid_springs(n_u: usize, n_v: usize, o: &LatticeOptions, positions: &[[f64; 3]]) -> Vec<Spring> {
+    let idx = |i: usize, j: usize| i * n_v + j;
+    let mut pairs: Vec<(usize, usize, SpringKind)> = Vec::new();
+    if o.structural {
+        for i in 0..n_u {
+            for j in 0..n_v {
+                if j + 1 < n_v {
+                    pairs.push((idx(i, j), idx(i, j + 1), SpringKind::Structural));
+                }
+                if i + 1 < n_u {
+                    pairs.push((idx(i, j), idx(i + 1, j), SpringKind::Structural));
+                }
+            }
+        }
+    }
+    if o.shear {
+        for i in 0..n_u.saturating_sub(1) {
+            for j in 0..n_v.saturating_sub(1) {
+                pairs.push((idx(i, j), idx(i + 1, j + 1), SpringKind::Shear));
+                pairs.push((idx(i + 1, j), idx(i, j + 1), SpringKind::Shear));
+            }
+        }
+    }
+    if o.bending {
+        for i in 0..n_u {
+            for j in 0..n_v {
+                if j + 2 < n_v {
+                    pairs.push((idx(i, j), idx(i, j + 2), SpringKind::Bend));
+                }
+                if i + 2 < n_u {
+                    pairs.push((idx(i, j), idx(i + 2, j), SpringKind::Bend));
+                }
+            }
+        }
+    }
+    let scale = 1.0 - o.pre_strain;
+    pairs
+        .into_iter()
+        .map(|(a, b, kind)| {
+            let k = match kind {
+                SpringKind::Structural => o.k_edge,
+                SpringKind::Shear => o.k_diag,
+                SpringKind::Bend => o.k_bend,
+            };
+            let length = crate::spring::norm(sub(positions[a], positions[b]));
+            Spring {
+                a,
+                b,
+                kind,
+                k,
+                rest_length: scale * length,
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,212 @@
+//! The mass-spring model as a [`DynamicModel`] on the free node coordinates.
+//!
+//! Equation of motion (paper eq. (7), SPEC §5, with the damping sign fixed to `−γ ẋ`):
+//! ```text
+//! m_a ẍ_a = f_elastic,a(x) − γ_a ẋ_a + m_a g
+//! ```
+//! In the form of the dynamics contract, `M q̈ + D q̇ + f_int(q) = f_ext(t)` on the free
+//! coordinates `q` (fixed nodes held at their initial positions): `M = diag(m_a) ⊗ I_3`,
+//! `D = diag(γ_a) ⊗ I_3`, `f_int = −f_elastic` (the sign of a stiffness) and
+//! `f_ext = m_a g` (constant). The tangent `∂f_int/∂q` is `K_T` of paper eqs. (9)–(10)
+//! restricted to the free coordinates.
+
+use std::sync::OnceLock;
+
+use nurbspring_linalg::SparseMatrix;
+use nurbspring_sim::{DofMap, DynamicModel, StabilityLimit, State, SystemMatrix, stability_limit};
+
+use crate::stiffness::{Coefficient, TangentPattern};
+use crate::topology::Topology;
+use crate::{MsmError, SpringKind, SpringLattice};
+
+/// A validated [`SpringLattice`] as a [`DynamicModel`] on the free node coordinates (diagonal
+/// mass and damping; `f_int = −f_elastic`; gravity as `f_ext`). See the module docs for the
+/// equation and its signs.
+///
+/// The free coordinates are those of the free nodes, in increasing node order, three per node
+/// (`[x, y, z]`), as [`DofMap`] orders them.
+pub struct MsmModel {
+    lattice: SpringLattice,
+    dof_map: DofMap,
+    topology: Topology,
+    pattern: OnceLock<TangentPattern>,
+    mass: SystemMatrix,
+    damping: Option<SystemMatrix>,
+    external: Vec<f64>,
+    x0: Vec<f64>,
+    q0: Vec<f64>,
+}
+
+impl MsmModel {
+    /// Validates the lattice ([`SpringLattice::validate`]) and precomputes the node-to-spring
+    /// incidence of the free nodes. The tangent pattern is built on first use.
+    pub fn new(lattice: SpringLattice) -> Result<Self, MsmError> {
+        lattice.validate()?;
+        let dof_map = DofMap::new(lattice.n_dofs(), &lattice.fixed_dofs())?;
+        let active: Vec<bool> = lattice.fixed.iter().map(|&f| !f).collect();
+        let topology = Topology::new(&lattice, &active);
+        let free_nodes = &topology.active_nodes;
+        let per_dof = |values: &[f64]| -> Vec<f64> {
+            free_nodes.iter().flat_map(|&a| [values[a]; 3]).collect()
+        };
+        let mass = SystemMatrix::Diagonal(per_dof(&lattice.masses));
+        let gamma = per_dof(&lattice.damping);
+        let damping = gamma
+            .iter()
+            .any(|&g| g != 0.0)
+            .then_some(SystemMatrix::Diagonal(gamma));
+        let g = lattice.gravity;
+        let external: Vec<f64> = free_nodes
+            .iter()
+            .flat_map(|&a| g.map(|gc| lattice.masses[a] * gc))
+            .collect();
+        let x0 = lattice.flat_positions();
+        let q0 = dof_map.restrict(&x0);
+        Ok(Self {
+            lattice,
+            dof_map,
+            topology,
+            pattern: OnceLock::new(),
+            mass,
+            damping,
+            external,
+            x0,
+            q0,
+        })
+    }
+
+    /// The lattice.
+    pub fn lattice(&self) -> &SpringLattice {
+        &self.lattice
+    }
+
+    /// The map between all node coordinates and the free ones.
+    pub fn dof_map(&self) -> &DofMap {
+        &self.dof_map
+    }
+
+    /// Indices of the free nodes, ascending (free node `i` owns free coordinates `3i .. 3i + 3`).
+    pub fn free_nodes(&self) -> &[usize] {
+        &self.topology.active_nodes
+    }
+
+    /// The free coordinates at the initial positions.
+    pub fn initial_positions(&self) -> &[f64] {
+        &self.q0
+    }
+
+    /// Initial state at the initial positions with node velocities `velocities` (one per node;
+    /// fixed nodes get zero; an empty slice means at rest, missing entries count as zero).
+    pub fn initial_state(&self, velocities: &[[f64; 3]]) -> State {
+        let v = self
+            .free_nodes()
+            .iter()
+            .flat_map(|&a| velocities.get(a).copied().unwrap_or([0.0; 3]))
+            .collect();
+        State {
+            t: 0.0,
+            q: self.q0.clone(),
+            v,
+        }
+    }
+
+    /// All `3N` node coordinates from the free ones (fixed nodes at their initial positions).
+    pub fn full_positions(&self, q_free: &[f64]) -> Vec<f64> {
+        let mut x = self.x0.clone();
+        self.dof_map.extend_into(q_free, &mut x);
+        x
+    }
+
+    /// `ω_max` of the linearized model at the initial positions and the explicit limit
+    /// `Δt_crit = 2/ω_max` (SPEC §5), by [`nurbspring_sim::stability_limit`].
+    pub fn stability(&self) -> Result<StabilityLimit, MsmError> {
+        Ok(stability_limit(self, &self.q0)?)
+    }
+
+    /// The unit-stiffness matrix `G_c` of one class on the free coordinates at `q` (so that
+    /// `tangent_stiffness(q) = Σ_c k_c G_c` when every spring of class `c` has stiffness `k_c`).
+    pub fn unit_stiffness(&self, kind: SpringKind, q: &[f64]) -> SparseMatrix {
+        self.assemble(q, &Coefficient::Unit(kind))
+    }
+
+    fn tangent_pattern(&self) -> &TangentPattern {
+        self.pattern.get_or_init(|| self.topology.pattern())
+    }
+
+    fn assemble(&self, q: &[f64], coef: &Coefficient) -> SparseMatrix {
+        let pattern = self.tangent_pattern();
+        let mut k = pattern.template.clone();
+        self.topology.fill(pattern, q, coef, k.values_mut());
+        k
+    }
+
+    fn check_len(&self, what: &str, len: usize) {
+        let n = self.q0.len();
+        assert_eq!(len, n, "{what}: expected {n} free coordinates, got {len}");
+    }
+}
+
+impl std::fmt::Debug for MsmModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MsmModel")
+            .field("nodes", &self.lattice.n_nodes())
+            .field("free_nodes", &self.topology.n_active())
+            .field("springs", &self.lattice.springs.len())
+            .field("damped", &self.damping.is_some())
+            .finish()
+    }
+}
+
+impl DynamicModel for MsmModel {
+    fn n_dofs(&self) -> usize {
+        self.q0.len()
+    }
+
+    fn mass(&self) -> &SystemMatrix {
+        &self.mass
+    }
+
+    /// `diag(γ_a) ⊗ I_3`, or `None` when every free node has `γ = 0`.
+    fn damping(&self) -> Option<&SystemMatrix> {
+        self.damping.as_ref()
+    }
+
+    /// `f_int(q) = −f_elastic(q)` (paper eq. (5)): `Σ_b k (1 − l/|d|) d` per free node.
+    /// Allocation-free and parallel over chunks of nodes.
+    fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+        self.check_len("internal_force q", q.len());
+        self.check_len("internal_force out", out.len());
+        let (x, _) = q.as_chunks::<3>();
+        let (f, _) = out.as_chunks_mut::<3>();
+        self.topology.internal_forces(x, f);
+    }
+
+    /// `f_ext = m_a g` on the free nodes (constant in time).
+    fn external_force(&self, _t: f64, out: &mut [f64]) {
+        out.copy_from_slice(&self.external);
+    }
+
+    /// `K_T(q) = ∂f_int/∂q` on the free coordinates (paper eqs. (9)–(10), geometric term
+    /// included), always with the same pattern.
+    fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+        self.check_len("tangent_stiffness q", q.len());
+        self.assemble(q, &Coefficient::Stiffness)
+    }
+
+    /// Elastic energy of every spring, those to fixed nodes included.
+    fn potential_energy(&self, q: &[f64]) -> f64 {
+        self.check_len("potential_energy q", q.len());
+        let (x, _) = q.as_chunks::<3>();
+        self.topology.energy(x)
+    }
+
+    /// `−(q − q_0)ᵀ f_ext`: the potential of the constant gravity load, zero at the initial
+    /// positions (so the total energy starts at the elastic plus kinetic energy).
+    fn external_potential(&self, _t: f64, q: &[f64]) -> f64 {
+        -q.iter()
+            .zip(&self.q0)
+            .zip(&self.external)
+            .map(|((q, q0), f)| (q - q0) * f)
+            .sum::<f64>()
+    }
+}

@@ -1,0 +1,269 @@
+//! Node-to-spring incidence (CSR) and the parallel, allocation-free force kernel.
+//!
+//! The moving ("active") nodes are renumbered `0 … n_active − 1` in increasing original order.
+//! For each active node the incidence lists the springs at it in two parts:
+//! - springs to other active nodes: the other node's active index and `(k, l)`;
+//! - springs to inactive (fixed) nodes: the fixed node's constant position and `(k, l)`.
+//!
+//! Each node then sums its own force (paper eq. (5)) without locks: the work is split into
+//! chunks of nodes with rayon, each chunk writing only its own output rows. Every spring is
+//! evaluated once from each end; since `d` only changes sign, the two forces are exact
+//! negatives, so the total force is zero up to the rounding of the per-node sums. Springs
+//! between two fixed nodes never move: their energy is a constant, computed once.
+
+use rayon::prelude::*;
+
+use crate::spring::{energy, internal_coefficient, sub};
+use crate::{SpringKind, SpringLattice};
+
+/// Nodes per rayon task.
+const CHUNK_NODES: usize = 2048;
+/// Springs per vectorized group in the force kernel.
+const GROUP: usize = 4;
+/// Below this many incidences the kernels run serially (rayon would cost more than it saves).
+const SERIAL_INCIDENCES: usize = 32_768;
+
+/// The incidence of a lattice restricted to its active nodes.
+#[derive(Clone, Debug)]
+pub(crate) struct Topology {
+    /// Active index → original node index.
+    pub active_nodes: Vec<usize>,
+    /// CSR offsets of the active–active incidences (length `n_active + 1`).
+    pub off: Vec<usize>,
+    /// Active index of the other node.
+    pub other: Vec<u32>,
+    /// `(k, l)` of the spring.
+    pub kl: Vec<[f64; 2]>,
+    /// Spring index.
+    pub spring: Vec<u32>,
+    /// CSR offsets of the active–fixed incidences.
+    pub off_fixed: Vec<usize>,
+    /// Position of the fixed node.
+    pub pos_fixed: Vec<[f64; 3]>,
+    /// `(k, l)` of the spring.
+    pub kl_fixed: Vec<[f64; 2]>,
+    /// Spring index.
+    pub spring_fixed: Vec<u32>,
+    /// Energy of the springs between two fixed nodes (constant).
+    pub fixed_energy: f64,
+    /// Kind of every spring of the lattice.
+    pub kinds: Vec<SpringKind>,
+}
+
+impl Topology {
+    /// Incidence with every node active (the full lattice).
+    pub fn all_nodes(lattice: &SpringLattice) -> Self {
+        Self::new(lattice, &vec![true; lattice.n_nodes()])
+    }
+
+    /// Incidence of the nodes with `active[a]`; the others are held at their lattice positions.
+    /// The lattice must be valid (fewer than 2³² nodes and springs).
+    pub fn new(lattice: &SpringLattice, active: &[bool]) -> Self {
+        let n = lattice.n_nodes();
+        let mut active_index = vec![u32::MAX; n];
+        let mut active_nodes = Vec::new();
+        for a in 0..n {
+            if active[a] {
+                active_index[a] = active_nodes.len() as u32;
+                active_nodes.push(a);
+            }
+        }
+        let n_active = active_nodes.len();
+        let mut deg = vec![0usize; n_active + 1];
+        let mut deg_fixed = vec![0usize; n_active + 1];
+        let mut fixed_energy = 0.0;
+        for s in &lattice.springs {
+            let (ia, ib) = (active_index[s.a], active_index[s.b]);
+            match (ia != u32::MAX, ib != u32::MAX) {
+                (true, true) => {
+                    deg[ia as usize] += 1;
+                    deg[ib as usize] += 1;
+                }
+                (true, false) => deg_fixed[ia as usize] += 1,
+                (false, true) => deg_fixed[ib as usize] += 1,
+                (false, false) => {
+                    fixed_energy += energy(
+                        s.k,
+                        s.rest_length,
+                        sub(lattice.positions[s.a], lattice.positions[s.b]),
+                    );
+                }
+            }
+        }
+        let off = exclusive_scan(&deg);
+        let off_fixed = exclusive_scan(&deg_fixed);
+        let (m, m_fixed) = (off[n_active], off_fixed[n_active]);
+        let mut other = vec![0u32; m];
+        let mut kl = vec![[0.0; 2]; m];
+        let mut spring = vec![0u32; m];
+        let mut pos_fixed = vec![[0.0; 3]; m_fixed];
+        let mut kl_fixed = vec![[0.0; 2]; m_fixed];
+        let mut spring_fixed = vec![0u32; m_fixed];
+        let mut next = off.clone();
+        let mut next_fixed = off_fixed.clone();
+        for (si, s) in lattice.springs.iter().enumerate() {
+            let (ia, ib) = (active_index[s.a], active_index[s.b]);
+            let params = [s.k, s.rest_length];
+            for (me, you, you_node) in [(ia, ib, s.b), (ib, ia, s.a)] {
+                if me == u32::MAX {
+                    continue;
+                }
+                let me = me as usize;
+                if you != u32::MAX {
+                    let e = next[me];
+                    next[me] += 1;
+                    other[e] = you;
+                    kl[e] = params;
+                    spring[e] = si as u32;
+                } else {
+                    let e = next_fixed[me];
+                    next_fixed[me] += 1;
+                    pos_fixed[e] = lattice.positions[you_node];
+                    kl_fixed[e] = params;
+                    spring_fixed[e] = si as u32;
+                }
+            }
+        }
+        Self {
+            active_nodes,
+            off,
+            other,
+            kl,
+            spring,
+            off_fixed,
+            pos_fixed,
+            kl_fixed,
+            spring_fixed,
+            fixed_energy,
+            kinds: lattice.springs.iter().map(|s| s.kind).collect(),
+        }
+    }
+
+    /// Number of active nodes.
+    pub fn n_active(&self) -> usize {
+        self.active_nodes.len()
+    }
+
+    fn n_incidences(&self) -> usize {
+        self.other.len() + self.pos_fixed.len()
+    }
+
+    /// Internal force `f_int = −f_elastic` (paper eq. (5) with the sign of a stiffness) on every
+    /// active node: `out[a] = Σ_b k (1 − l/|d|) d`, `d = x_a − x_b`, with `x` the active
+    /// positions. Allocation-free; parallel over chunks of nodes for large lattices.
+    pub fn internal_forces(&self, x: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        let n = self.n_active();
+        assert_eq!(x.len(), n, "positions of {n} active nodes expected");
+        assert_eq!(out.len(), n, "forces of {n} active nodes expected");
+        if self.n_incidences() < SERIAL_INCIDENCES {
+            self.forces_range(0, x, out);
+        } else {
+            out.par_chunks_mut(CHUNK_NODES)
+                .enumerate()
+                .for_each(|(c, chunk)| self.forces_range(c * CHUNK_NODES, x, chunk));
+        }
+    }
+
+    /// Forces of the active nodes `first .. first + out.len()`.
+    ///
+    /// The springs of a node are taken [`GROUP`] at a time, with the differences, lengths and
+    /// coefficients in small arrays, so that the compiler evaluates the square roots and
+    /// divisions of a group with vector instructions; the sums are still formed in incidence
+    /// order, so the result is the same as a one-by-one loop, bit for bit.
+    #[inline]
+    fn forces_range(&self, first: usize, x: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        let last = first + out.len();
+        let offsets = self.off[first..=last].windows(2);
+        let offsets_fixed = self.off_fixed[first..=last].windows(2);
+        for (((fa, &xa), w), wf) in out
+            .iter_mut()
+            .zip(&x[first..last])
+            .zip(offsets)
+            .zip(offsets_fixed)
+        {
+            let mut f = [0.0; 3];
+            let (others, others_rest) = self.other[w[0]..w[1]].as_chunks::<GROUP>();
+            let (params, params_rest) = self.kl[w[0]..w[1]].as_chunks::<GROUP>();
+            for (o, kl) in others.iter().zip(params) {
+                let mut d = [[0.0; GROUP]; 3];
+                for i in 0..GROUP {
+                    let xb = x[o[i] as usize];
+                    d[0][i] = xa[0] - xb[0];
+                    d[1][i] = xa[1] - xb[1];
+                    d[2][i] = xa[2] - xb[2];
+                }
+                let mut s = [0.0; GROUP];
+                for i in 0..GROUP {
+                    let r = (d[0][i] * d[0][i] + d[1][i] * d[1][i] + d[2][i] * d[2][i]).sqrt();
+                    s[i] = kl[i][0] * (1.0 - kl[i][1] / r);
+                }
+                for i in 0..GROUP {
+                    f[0] += s[i] * d[0][i];
+                    f[1] += s[i] * d[1][i];
+                    f[2] += s[i] * d[2][i];
+                }
+            }
+            for (&o, &[k, l]) in others_rest.iter().zip(params_rest) {
+                add_spring_force(&mut f, sub(xa, x[o as usize]), k, l);
+            }
+            let (lo, hi) = (wf[0], wf[1]);
+            for (&xb, &[k, l]) in self.pos_fixed[lo..hi].iter().zip(&self.kl_fixed[lo..hi]) {
+                add_spring_force(&mut f, sub(xa, xb), k, l);
+            }
+            *fa = f;
+        }
+    }
+
+    /// Elastic energy `Σ k (|d| − l)² / 2` of every spring (SPEC §5) with the active nodes at `x`.
+    pub fn energy(&self, x: &[[f64; 3]]) -> f64 {
+        let n = self.n_active();
+        assert_eq!(x.len(), n, "positions of {n} active nodes expected");
+        let range = |first: usize, last: usize| -> f64 {
+            let mut e_shared = 0.0;
+            let mut e_fixed = 0.0;
+            for a in first..last {
+                let xa = x[a];
+                for e in self.off[a]..self.off[a + 1] {
+                    let [k, l] = self.kl[e];
+                    e_shared += energy(k, l, sub(xa, x[self.other[e] as usize]));
+                }
+                for e in self.off_fixed[a]..self.off_fixed[a + 1] {
+                    let [k, l] = self.kl_fixed[e];
+                    e_fixed += energy(k, l, sub(xa, self.pos_fixed[e]));
+                }
+            }
+            // Springs between two active nodes are visited from both ends.
+            0.5 * e_shared + e_fixed
+        };
+        let moving = if self.n_incidences() < SERIAL_INCIDENCES {
+            range(0, n)
+        } else {
+            // Per-chunk sums added in a fixed order: the result does not depend on scheduling.
+            let parts: Vec<f64> = (0..n.div_ceil(CHUNK_NODES))
+                .into_par_iter()
+                .map(|c| range(c * CHUNK_NODES, ((c + 1) * CHUNK_NODES).min(n)))
+                .collect();
+            parts.iter().sum()
+        };
+        moving + self.fixed_energy
+    }
+}
+
+/// `f += k (1 − l/|d|) d`.
+#[inline(always)]
+fn add_spring_force(f: &mut [f64; 3], d: [f64; 3], k: f64, l: f64) {
+    let s = internal_coefficient(k, l, d);
+    f[0] += s * d[0];
+    f[1] += s * d[1];
+    f[2] += s * d[2];
+}
+
+fn exclusive_scan(counts: &[usize]) -> Vec<usize> {
+    let mut off = Vec::with_capacity(counts.len());
+    let mut acc = 0;
+    for &c in counts {
+        off.push(acc);
+        acc += c;
+    }
+    off
+}

@@ -1,0 +1,470 @@
+//! Lattices from surfaces and lists: the paper's lattice (SPEC §7), grids, the SPEC §5 fixed
+//! rule, validation and the JSON form.
+
+mod support;
+
+use nurbspring_msm::{
+    FixedNodes, LatticeFile, LatticeOptions, MAX_NODES, MsmError, MsmModel, ParameterGrid, Spring,
+    SpringKind, SpringLattice,
+};
+use nurbspring_sim::DynamicModel;
+use support::tolerances::*;
+use support::{curved_lattice, curved_surface, paper_fixed_points, paper_surface};
+
+fn paper_lattice(greville: bool) -> SpringLattice {
+    let options = LatticeOptions {
+        k_edge: 2.7225,
+        k_diag: 0.8661,
+        mass: 0.005,
+        ..Default::default()
+    };
+    SpringLattice::from_surface(&paper_surface(greville), &options, &paper_fixed_points()).unwrap()
+}
+
+#[test]
+fn paper_lattice_builds_with_45_by_45_stiffness() {
+    let lattice = paper_lattice(false);
+    assert_eq!(lattice.n_nodes(), 15);
+    assert_eq!(lattice.grid, Some((5, 3)));
+    assert_eq!(lattice.count(SpringKind::Structural), 22);
+    assert_eq!(lattice.count(SpringKind::Shear), 16);
+    assert_eq!(
+        lattice.kinds_present(),
+        vec![SpringKind::Structural, SpringKind::Shear]
+    );
+    let params = lattice.params.as_ref().unwrap();
+    assert_eq!(params[7], (0.5, 0.5));
+    assert_eq!(params[14], (1.0, 1.0));
+    // SPEC §5 fixed rule: the nodes at (0.25, 0.5), (0.5, 0.5), (0.75, 0.5) see one of the three
+    // free control points (2..4, 2) and move; the 12 boundary nodes are fixed.
+    let free: Vec<usize> = (0..15).filter(|&a| !lattice.fixed[a]).collect();
+    assert_eq!(free, vec![4, 7, 10]);
+    let x0 = lattice.flat_positions();
+    let k_s = lattice.tangent_stiffness(&x0);
+    assert_eq!((k_s.nrows(), k_s.ncols()), (45, 45));
+    let model = MsmModel::new(lattice).unwrap();
+    assert_eq!(model.n_dofs(), 9);
+}
+
+#[test]
+fn flat_lattice_at_rest_has_no_out_of_plane_stiffness() {
+    for greville in [false, true] {
+        let lattice = paper_lattice(greville);
+        let x0 = lattice.flat_positions();
+        assert!(
+            x0.iter().skip(2).step_by(3).all(|&z| z == 2.0),
+            "the sheet is flat at z = 2"
+        );
+        let k = lattice.tangent_stiffness(&x0);
+        let mut g = vec![k];
+        g.extend(
+            lattice
+                .kinds_present()
+                .into_iter()
+                .map(|c| lattice.unit_stiffness(c, &x0)),
+        );
+        for m in &g {
+            // z rows (and, by symmetry, z columns) are exactly zero.
+            for (row, col, v) in m.triplets() {
+                if row % 3 == 2 || col % 3 == 2 {
+                    assert_eq!(v, 0.0, "entry ({row}, {col}) of a flat lattice at rest");
+                }
+            }
+            assert!(m.frobenius_norm() > 0.0);
+        }
+        // With pre-strain the geometric term gives out-of-plane stiffness.
+        let options = LatticeOptions {
+            pre_strain: 0.1,
+            ..Default::default()
+        };
+        let tense =
+            SpringLattice::from_surface(&paper_surface(greville), &options, &paper_fixed_points())
+                .unwrap();
+        let k = tense.tangent_stiffness(&x0);
+        assert!(k.get(3 * 7 + 2, 3 * 7 + 2) > 0.0);
+    }
+}
+
+#[test]
+fn greville_net_samples_the_affine_sheet() {
+    // On the Greville net the paper's surface is c(u, v) = (3u, 5v, 2) (SPEC §7).
+    let lattice = paper_lattice(true);
+    for (x, &(u, v)) in lattice
+        .positions
+        .iter()
+        .zip(lattice.params.as_ref().unwrap())
+    {
+        let expected = [3.0 * u, 5.0 * v, 2.0];
+        for c in 0..3 {
+            assert!(
+                (x[c] - expected[c]).abs() < AFFINE_SURFACE * 5.0,
+                "{x:?} vs {expected:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn grids_and_spring_counts() {
+    let s = curved_surface();
+    let count = |grid: ParameterGrid, structural: bool, shear: bool, bending: bool| {
+        let o = LatticeOptions {
+            grid,
+            structural,
+            shear,
+            bending,
+            ..Default::default()
+        };
+        let l = SpringLattice::from_surface(&s, &o, &[]).unwrap();
+        (l.grid.unwrap(), l.springs.len())
+    };
+    let uniform = ParameterGrid::Uniform {
+        nodes_u: 6,
+        nodes_v: 4,
+    };
+    // Structural: 6·3 + 5·4 = 38; shear: 2·5·3 = 30; bending: 6·2 + 4·4 = 28.
+    assert_eq!(count(uniform.clone(), true, false, false), ((6, 4), 38));
+    assert_eq!(count(uniform.clone(), false, true, false), ((6, 4), 30));
+    assert_eq!(count(uniform.clone(), false, false, true), ((6, 4), 28));
+    assert_eq!(count(uniform, true, true, true), ((6, 4), 96));
+    // Knots of a single-span biquadratic: 2 × 2 nodes; Greville: 3 × 3.
+    assert_eq!(count(ParameterGrid::Knots, true, true, false), ((2, 2), 6));
+    assert_eq!(
+        count(ParameterGrid::Greville, true, true, false),
+        ((3, 3), 20)
+    );
+}
+
+#[test]
+fn pre_strain_scales_rest_lengths() {
+    let plain = curved_lattice(4, 4, 0.0);
+    let tense = curved_lattice(4, 4, 0.2);
+    let x0 = plain.flat_positions();
+    for (s, t) in plain.springs.iter().zip(&tense.springs) {
+        assert!((s.rest_length - s.length(&x0)).abs() < 1e-15 * s.rest_length);
+        assert!((t.rest_length - 0.8 * s.rest_length).abs() < 1e-15 * s.rest_length);
+    }
+}
+
+#[test]
+fn fixed_nodes_by_list_and_node_nearest() {
+    let o = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: 5,
+            nodes_v: 3,
+        },
+        fixed: FixedNodes::List(vec![0, 14]),
+        ..Default::default()
+    };
+    let l = SpringLattice::from_surface(&curved_surface(), &o, &[1, 2, 3]).unwrap();
+    assert_eq!(l.fixed_nodes(), vec![0, 14]);
+    assert_eq!(l.fixed_dofs(), vec![0, 1, 2, 42, 43, 44]);
+    assert_eq!(l.node_nearest(0.5, 0.5), 7);
+    assert_eq!(l.node_nearest(1.0, 0.0), 12);
+    // Without parameters: by grid, then by position.
+    let mut by_grid = l.clone();
+    by_grid.params = None;
+    assert_eq!(by_grid.node_nearest(0.5, 0.5), 7);
+    by_grid.grid = None;
+    assert_eq!(by_grid.node_nearest(0.0, 1.0), 2);
+    let bad = LatticeOptions {
+        fixed: FixedNodes::List(vec![15]),
+        ..o
+    };
+    assert!(matches!(
+        SpringLattice::from_surface(&curved_surface(), &bad, &[]),
+        Err(MsmError::InvalidParameter { .. })
+    ));
+}
+
+#[test]
+fn auto_rule_with_all_control_points_fixed_fixes_everything() {
+    let o = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: 4,
+            nodes_v: 4,
+        },
+        ..Default::default()
+    };
+    let all: Vec<usize> = (0..9).collect();
+    let l = SpringLattice::from_surface(&curved_surface(), &o, &all).unwrap();
+    assert!(l.fixed.iter().all(|&f| f));
+    // Fixing the first row of control points (i = 0) fixes exactly the nodes at u = 0.
+    let l = SpringLattice::from_surface(&curved_surface(), &o, &[0, 1, 2]).unwrap();
+    assert_eq!(l.fixed_nodes(), vec![0, 1, 2, 3]);
+}
+
+fn two_nodes(spring: Spring) -> Result<SpringLattice, MsmError> {
+    SpringLattice::from_parts(
+        vec![[0.0; 3], [1.0, 0.0, 0.0]],
+        vec![1.0; 2],
+        vec![0.0; 2],
+        vec![false; 2],
+        vec![spring],
+        [0.0; 3],
+    )
+}
+
+#[test]
+fn validation_errors() {
+    let ok = Spring {
+        a: 0,
+        b: 1,
+        kind: SpringKind::Structural,
+        k: 1.0,
+        rest_length: 1.0,
+    };
+    assert!(two_nodes(ok).is_ok());
+    assert!(matches!(
+        two_nodes(Spring { b: 0, ..ok }),
+        Err(MsmError::ZeroLengthSpring {
+            spring: 0,
+            a: 0,
+            b: 0
+        })
+    ));
+    assert!(matches!(
+        two_nodes(Spring { b: 5, ..ok }),
+        Err(MsmError::MissingNode {
+            spring: 0,
+            node: 5,
+            n_nodes: 2
+        })
+    ));
+    assert!(matches!(
+        two_nodes(Spring { k: -1.0, ..ok }),
+        Err(MsmError::NegativeStiffness { spring: 0, .. })
+    ));
+    assert!(matches!(
+        two_nodes(Spring { k: f64::NAN, ..ok }),
+        Err(MsmError::NonFinite { .. })
+    ));
+    assert!(matches!(
+        two_nodes(Spring {
+            rest_length: -0.5,
+            ..ok
+        }),
+        Err(MsmError::InvalidParameter { .. })
+    ));
+    let parts = |positions: Vec<[f64; 3]>, masses: Vec<f64>, damping: Vec<f64>| {
+        SpringLattice::from_parts(
+            positions,
+            masses,
+            damping,
+            vec![false; 2],
+            vec![ok],
+            [0.0; 3],
+        )
+    };
+    assert!(matches!(
+        parts(
+            vec![[0.0; 3], [1.0, 0.0, 0.0]],
+            vec![1.0, 0.0],
+            vec![0.0; 2]
+        ),
+        Err(MsmError::NonPositiveMass { node: 1, .. })
+    ));
+    assert!(matches!(
+        parts(
+            vec![[0.0; 3], [1.0, 0.0, 0.0]],
+            vec![1.0, -2.0],
+            vec![0.0; 2]
+        ),
+        Err(MsmError::NonPositiveMass { node: 1, .. })
+    ));
+    assert!(matches!(
+        parts(
+            vec![[0.0; 3], [f64::INFINITY, 0.0, 0.0]],
+            vec![1.0; 2],
+            vec![0.0; 2]
+        ),
+        Err(MsmError::NonFinite { index: 1, .. })
+    ));
+    assert!(matches!(
+        parts(vec![[0.0; 3], [1.0, 0.0, 0.0]], vec![1.0; 3], vec![0.0; 2]),
+        Err(MsmError::LengthMismatch { .. })
+    ));
+    assert!(matches!(
+        parts(
+            vec![[0.0; 3], [1.0, 0.0, 0.0]],
+            vec![1.0; 2],
+            vec![0.0, -1.0]
+        ),
+        Err(MsmError::InvalidParameter { .. })
+    ));
+    // Coincident nodes.
+    assert!(matches!(
+        parts(vec![[0.0; 3], [0.0; 3]], vec![1.0; 2], vec![0.0; 2]),
+        Err(MsmError::ZeroLengthSpring { .. })
+    ));
+    // Too many nodes: refused before allocating anything.
+    let huge = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: 100_000,
+            nodes_v: 100_001,
+        },
+        ..Default::default()
+    };
+    match SpringLattice::from_surface(&curved_surface(), &huge, &[]) {
+        Err(MsmError::TooLarge { nodes }) => assert!(nodes > MAX_NODES),
+        other => panic!("expected TooLarge, got {other:?}"),
+    }
+    let overflow = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: usize::MAX,
+            nodes_v: 3,
+        },
+        ..Default::default()
+    };
+    assert!(matches!(
+        SpringLattice::from_surface(&curved_surface(), &overflow, &[]),
+        Err(MsmError::TooLarge { .. })
+    ));
+    // Options.
+    let s = curved_surface();
+    for bad in [
+        LatticeOptions {
+            pre_strain: 1.0,
+            ..Default::default()
+        },
+        LatticeOptions {
+            k_diag: -1.0,
+            ..Default::default()
+        },
+        LatticeOptions {
+            damping: f64::NAN,
+            ..Default::default()
+        },
+        LatticeOptions {
+            grid: ParameterGrid::Uniform {
+                nodes_u: 1,
+                nodes_v: 4,
+            },
+            ..Default::default()
+        },
+    ] {
+        assert!(
+            matches!(
+                SpringLattice::from_surface(&s, &bad, &[]),
+                Err(MsmError::InvalidParameter { .. })
+            ),
+            "{bad:?}"
+        );
+    }
+    assert!(matches!(
+        SpringLattice::from_surface(
+            &s,
+            &LatticeOptions {
+                mass: 0.0,
+                ..Default::default()
+            },
+            &[]
+        ),
+        Err(MsmError::NonPositiveMass { .. })
+    ));
+    // A model re-validates what set_stiffness / set_mass left unchecked.
+    let mut l = curved_lattice(3, 3, 0.0);
+    l.set_stiffness(SpringKind::Shear, -0.5);
+    assert!(matches!(
+        MsmModel::new(l.clone()),
+        Err(MsmError::NegativeStiffness { .. })
+    ));
+    l.set_stiffness(SpringKind::Shear, 0.5);
+    l.set_mass(0.0);
+    assert!(matches!(
+        MsmModel::new(l.clone()),
+        Err(MsmError::NonPositiveMass { node: 0, .. })
+    ));
+    assert!(l.set_masses(vec![1.0; 4]).is_err());
+    assert!(l.set_masses(vec![2.0; 9]).is_ok());
+    // Messages carry the values.
+    let e = two_nodes(Spring { k: -3.5, ..ok }).unwrap_err().to_string();
+    assert!(e.contains("-3.5"), "{e}");
+}
+
+#[test]
+fn json_round_trip() {
+    let mut lattice = curved_lattice(4, 3, 0.1);
+    lattice.fixed[0] = true;
+    lattice.damping[5] = 0.25;
+    lattice.masses[2] = 1.0 / 3.0;
+    lattice.gravity = [0.0, -1.0 / 7.0, -9.81];
+    let text = lattice.to_json_string();
+    assert!(text.contains("\"kind\": \"bend\"") && text.contains("\"uv\""));
+    let back = SpringLattice::from_json_str(&text).unwrap();
+    assert_eq!(back.grid, lattice.grid);
+    assert_eq!(back.fixed, lattice.fixed);
+    assert_eq!(back.springs.len(), lattice.springs.len());
+    let close = |a: f64, b: f64| (a - b).abs() <= JSON_ROUND_TRIP * a.abs().max(b.abs());
+    for (a, b) in back
+        .positions
+        .iter()
+        .flatten()
+        .zip(lattice.positions.iter().flatten())
+    {
+        assert!(close(*a, *b));
+    }
+    for (a, b) in back.springs.iter().zip(&lattice.springs) {
+        assert_eq!((a.a, a.b, a.kind), (b.a, b.b, b.kind));
+        assert!(close(a.k, b.k) && close(a.rest_length, b.rest_length));
+    }
+    for (a, b) in back
+        .masses
+        .iter()
+        .zip(&lattice.masses)
+        .chain(back.damping.iter().zip(&lattice.damping))
+    {
+        assert!(close(*a, *b));
+    }
+    for (a, b) in back
+        .params
+        .as_ref()
+        .unwrap()
+        .iter()
+        .zip(lattice.params.as_ref().unwrap())
+    {
+        assert!(close(a.0, b.0) && close(a.1, b.1));
+    }
+    assert!(
+        back.gravity
+            .iter()
+            .zip(&lattice.gravity)
+            .all(|(a, b)| close(*a, *b))
+    );
+    // The file form itself round-trips through serde.
+    let file: LatticeFile = serde_json::from_str(&text).unwrap();
+    assert_eq!(
+        LatticeFile::from_json_str(&file.to_json_string())
+            .unwrap()
+            .nodes
+            .len(),
+        12
+    );
+}
+
+#[test]
+fn json_errors() {
+    let missing =
+        r#"{"nodes": [{"position": [0,0,0], "mass": 1}], "springs": [{"a": 0, "b": 3, "k": 1}]}"#;
+    assert!(matches!(
+        SpringLattice::from_json_str(missing),
+        Err(MsmError::MissingNode { node: 3, .. })
+    ));
+    let unknown = r#"{"nodes": [], "springs": [], "colour": 3}"#;
+    assert!(matches!(
+        SpringLattice::from_json_str(unknown),
+        Err(MsmError::Json(_))
+    ));
+    let bad_kind = r#"{"nodes": [{"position": [0,0,0], "mass": 1}, {"position": [1,0,0], "mass": 1}],
+                       "springs": [{"a": 0, "b": 1, "k": 1, "kind": "torsion"}]}"#;
+    assert!(matches!(
+        SpringLattice::from_json_str(bad_kind),
+        Err(MsmError::Json(_))
+    ));
+    let mixed_uv = r#"{"nodes": [{"position": [0,0,0], "mass": 1, "uv": [0, 0]}, {"position": [1,0,0], "mass": 1}],
+                       "springs": []}"#;
+    assert!(matches!(
+        SpringLattice::from_json_str(mixed_uv),
+        Err(MsmError::LengthMismatch { .. })
+    ));
+}

@@ -1,0 +1,78 @@
+//! The error type of `nurbspring-sim`.
+
+use nurbspring_linalg::LinalgError;
+
+/// Everything that can go wrong while setting up or running a simulation.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SimError {
+    /// The time step is zero, negative or not finite.
+    #[error("invalid time step Δt = {dt} (must be positive and finite)")]
+    InvalidTimeStep {
+        /// The rejected step.
+        dt: f64,
+    },
+    /// The end time is not finite or lies before the initial time.
+    #[error("invalid end time t_end = {t_end} (must be finite and not before the initial time)")]
+    InvalidDuration {
+        /// The rejected end time.
+        t_end: f64,
+    },
+    /// An explicit scheme was asked to run above its stability limit `Δt_crit = 2/ω_max`.
+    #[error(
+        "{integrator} is unstable at Δt = {dt:e}: the explicit stability limit is Δt_crit = 2/ω_max = {dt_critical:e} \
+         (reduce Δt, use an implicit integrator, or force the run)"
+    )]
+    Unstable {
+        /// The integrator's name.
+        integrator: &'static str,
+        /// The requested step.
+        dt: f64,
+        /// The stability limit.
+        dt_critical: f64,
+    },
+    /// The state became non-finite or ran away.
+    #[error("simulation diverged at step {step} (t = {time:e}): {reason}")]
+    Diverged {
+        /// Step at which divergence was detected (1-based count of steps taken).
+        step: usize,
+        /// Time reached at that step.
+        time: f64,
+        /// What was detected.
+        reason: String,
+    },
+    /// Newton's method did not reach its tolerance in an implicit step.
+    #[error(
+        "Newton iteration failed at step {step} (t = {time:e}) after {iterations} iterations; relative residual {residual:e}"
+    )]
+    NewtonFailed {
+        /// Step being computed (1-based).
+        step: usize,
+        /// Time at the end of that step.
+        time: f64,
+        /// Iterations performed.
+        iterations: usize,
+        /// Final relative residual.
+        residual: f64,
+    },
+    /// A vector or matrix has the wrong size.
+    #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
+    DimensionMismatch {
+        /// The offending quantity.
+        what: &'static str,
+        /// The size it should have.
+        expected: usize,
+        /// The size it has.
+        found: usize,
+    },
+    /// A linear-algebra failure (factorization, eigenproblem).
+    #[error(transparent)]
+    Linalg(#[from] LinalgError),
+    /// The integrator cannot handle this model.
+    #[error("{integrator} does not support this model: {reason}")]
+    NotSupported {
+        /// The integrator's name.
+        integrator: &'static str,
+        /// Why not.
+        reason: String,
+    },
+}

@@ -1,0 +1,211 @@
+//! The implicit core shared by Newmark and backward Euler.
+//!
+//! Both schemes solve, for the end-of-step acceleration `a`,
+//! `M a + D (v̂ + c_v a) + f_int(q̂ + c_q a) = f_ext(t_{n+1})`
+//! with predictors `q̂, v̂` and coefficients `(c_q, c_v)` = `(βΔt², γΔt)` (Newmark) or
+//! `(Δt², Δt)` (backward Euler, where `a = (v_{n+1} − v_n)/Δt`). The Newton matrix is
+//! `J = M + c_v D + c_q K_T(q̂ + c_q a)`. For a linear model J is constant: it is factored
+//! once and one solve is exact. Otherwise Newton iterates with J refactored each iteration:
+//! sparse Cholesky ([`SpdSolver`], symbolic analysis once) while J is positive definite, and a
+//! sparse LU ([`LuSolver`]) when Cholesky fails — compressed springs make `K_T` indefinite.
+
+use nurbspring_linalg::{LinalgError, LuSolver, SparseMatrix, SpdSolver};
+
+use super::{NewtonSettings, norm};
+use crate::{DynamicModel, SimError};
+
+/// Factorization of a Newton matrix: Cholesky when possible, LU fallback.
+pub(crate) struct NewtonSolver {
+    spd: Option<SpdSolver>,
+    lu: Option<LuSolver>,
+    use_lu: bool,
+}
+
+impl NewtonSolver {
+    pub(crate) fn new() -> Self {
+        Self {
+            spd: None,
+            lu: None,
+            use_lu: false,
+        }
+    }
+
+    /// Factors `j` (Cholesky, refactoring with the stored symbolic analysis; LU if not SPD).
+    pub(crate) fn factor(&mut self, j: &SparseMatrix) -> Result<(), SimError> {
+        let result = match &mut self.spd {
+            Some(s) => s.refactor(j),
+            None => SpdSolver::new(j).map(|s| {
+                self.spd = Some(s);
+            }),
+        };
+        match result {
+            Ok(()) => {
+                self.use_lu = false;
+                Ok(())
+            }
+            Err(LinalgError::NotPositiveDefinite { .. }) => {
+                self.lu = Some(LuSolver::new(j)?);
+                self.use_lu = true;
+                Ok(())
+            }
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    pub(crate) fn solve_in_place(&self, x: &mut [f64]) {
+        match (self.use_lu, &self.spd, &self.lu) {
+            (false, Some(s), _) => s.solve_in_place(x),
+            (true, _, Some(l)) => l.solve_in_place(x),
+            _ => unreachable!("NewtonSolver used before factor"),
+        }
+    }
+}
+
+/// `M + c_v D + c_q K`.
+pub(crate) fn newton_matrix(
+    model: &dyn DynamicModel,
+    m: &SparseMatrix,
+    cv: f64,
+    cq: f64,
+    k: &SparseMatrix,
+) -> Result<SparseMatrix, SimError> {
+    let mut j = SparseMatrix::linear_combination(1.0, m, cq, k)?;
+    if let Some(d) = model.damping() {
+        j = SparseMatrix::linear_combination(1.0, &j, cv, &d.to_sparse())?;
+    }
+    Ok(j)
+}
+
+/// Solver state for `M a + D (v̂ + c_v a) + f_int(q̂ + c_q a) = f_ext`.
+pub(crate) struct ImplicitCore {
+    pub(crate) name: &'static str,
+    pub(crate) cq: f64,
+    pub(crate) cv: f64,
+    linear: bool,
+    mass: SparseMatrix,
+    solver: NewtonSolver,
+    newton: NewtonSettings,
+    // buffers
+    q_trial: Vec<f64>,
+    v_trial: Vec<f64>,
+    fext: Vec<f64>,
+    fint: Vec<f64>,
+    residual: Vec<f64>,
+    work: Vec<f64>,
+}
+
+impl ImplicitCore {
+    pub(crate) fn new(
+        name: &'static str,
+        model: &dyn DynamicModel,
+        cq: f64,
+        cv: f64,
+        newton: NewtonSettings,
+    ) -> Result<Self, SimError> {
+        let n = model.n_dofs();
+        let mass = model.mass().to_sparse();
+        let mut solver = NewtonSolver::new();
+        let linear = match model.linear_stiffness() {
+            Some(k) => {
+                solver.factor(&newton_matrix(model, &mass, cv, cq, k)?)?;
+                true
+            }
+            None => false,
+        };
+        Ok(Self {
+            name,
+            cq,
+            cv,
+            linear,
+            mass,
+            solver,
+            newton,
+            q_trial: vec![0.0; n],
+            v_trial: vec![0.0; n],
+            fext: vec![0.0; n],
+            fint: vec![0.0; n],
+            residual: vec![0.0; n],
+            work: vec![0.0; n],
+        })
+    }
+
+    /// Solves for `a` (initial guess in `a`, overwritten by the solution) at time `t_new`.
+    /// `step` is only used in error reports.
+    pub(crate) fn solve(
+        &mut self,
+        model: &dyn DynamicModel,
+        q_hat: &[f64],
+        v_hat: &[f64],
+        t_new: f64,
+        a: &mut [f64],
+        step: usize,
+    ) -> Result<(), SimError> {
+        model.external_force(t_new, &mut self.fext);
+        if self.linear {
+            // rhs = f_ext − f_int(q̂) − D v̂; J a = rhs exactly, since f_int is affine.
+            model.internal_force(q_hat, &mut self.fint);
+            for i in 0..a.len() {
+                a[i] = self.fext[i] - self.fint[i];
+            }
+            if let Some(d) = model.damping() {
+                d.mul_vec_add(-1.0, v_hat, a);
+            }
+            self.solver.solve_in_place(a);
+            return Ok(());
+        }
+        let mut last = f64::INFINITY;
+        for it in 0..=self.newton.max_iterations {
+            for i in 0..a.len() {
+                self.q_trial[i] = q_hat[i] + self.cq * a[i];
+                self.v_trial[i] = v_hat[i] + self.cv * a[i];
+            }
+            model.internal_force(&self.q_trial, &mut self.fint);
+            // R = M a + D v + f_int − f_ext, with the size of each term for the relative test.
+            self.mass.mul_vec(a, &mut self.residual);
+            let mut scale = norm(&self.residual)
+                .max(norm(&self.fint))
+                .max(norm(&self.fext));
+            if let Some(d) = model.damping() {
+                d.mul_vec(&self.v_trial, &mut self.work);
+                scale = scale.max(norm(&self.work));
+                for i in 0..a.len() {
+                    self.residual[i] += self.work[i];
+                }
+            }
+            for i in 0..a.len() {
+                self.residual[i] += self.fint[i] - self.fext[i];
+            }
+            let r = norm(&self.residual);
+            if !r.is_finite() {
+                return Err(SimError::Diverged {
+                    step,
+                    time: t_new,
+                    reason: format!("non-finite Newton residual in {}", self.name),
+                });
+            }
+            last = if scale > 0.0 { r / scale } else { 0.0 };
+            if r <= self.newton.tolerance * scale {
+                return Ok(());
+            }
+            if it == self.newton.max_iterations {
+                break;
+            }
+            let kt = model.tangent_stiffness(&self.q_trial);
+            let j = newton_matrix(model, &self.mass, self.cv, self.cq, &kt)?;
+            self.solver.factor(&j)?;
+            for i in 0..a.len() {
+                self.work[i] = -self.residual[i];
+            }
+            self.solver.solve_in_place(&mut self.work);
+            for i in 0..a.len() {
+                a[i] += self.work[i];
+            }
+        }
+        Err(SimError::NewtonFailed {
+            step,
+            time: t_new,
+            iterations: self.newton.max_iterations,
+            residual: last,
+        })
+    }
+}

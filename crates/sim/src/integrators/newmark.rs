@@ -1,0 +1,109 @@
+//! Newmark average acceleration (β = 1/4, γ = 1/2; Newmark 1959).
+//!
+//! ODE: `M q̈ + D q̇ + f_int(q) = f_ext(t)` (f_int with the sign of a stiffness). With
+//! `a_n = q̈(t_n)`:
+//! `q_{n+1} = q_n + Δt v_n + Δt² ((½ − β) a_n + β a_{n+1})`,
+//! `v_{n+1} = v_n + Δt ((1 − γ) a_n + γ a_{n+1})`,
+//! and `a_{n+1}` from the equation of motion at `t_{n+1}`. Linear models factor
+//! `M + γΔt D + βΔt² K` once; nonlinear models run Newton on the tangent each step (see
+//! [`super::implicit`]). Second order, unconditionally stable, and for D = 0 it conserves the
+//! energy `½vᵀMv + ½(q − q_rest)ᵀK(q − q_rest)` of a linear model exactly (up to round-off).
+
+use nurbspring_linalg::SpdSolver;
+
+use super::implicit::ImplicitCore;
+use super::{NewtonSettings, check_fixed_dt};
+use crate::{DynamicModel, SimError, State};
+
+const BETA: f64 = 0.25;
+const GAMMA: f64 = 0.5;
+
+/// Newmark average-acceleration stepper.
+pub struct Newmark {
+    dt: f64,
+    core: ImplicitCore,
+    a: Vec<f64>,
+    a_new: Vec<f64>,
+    q_hat: Vec<f64>,
+    v_hat: Vec<f64>,
+    steps: usize,
+}
+
+/// `M⁻¹ (f_ext(t) − f_int(q) − D v)`: the acceleration of the equation of motion.
+pub(crate) fn initial_acceleration(
+    model: &dyn DynamicModel,
+    state: &State,
+) -> Result<Vec<f64>, SimError> {
+    let n = model.n_dofs();
+    let mut f = vec![0.0; n];
+    let mut fint = vec![0.0; n];
+    model.external_force(state.t, &mut f);
+    model.internal_force(&state.q, &mut fint);
+    for i in 0..n {
+        f[i] -= fint[i];
+    }
+    if let Some(d) = model.damping() {
+        d.mul_vec_add(-1.0, &state.v, &mut f);
+    }
+    match model.mass().as_diagonal() {
+        Some(m) => Ok(f.iter().zip(&m).map(|(f, m)| f / m).collect()),
+        None => Ok(SpdSolver::new(&model.mass().to_sparse())?.solve(&f)),
+    }
+}
+
+impl Newmark {
+    /// Builds the stepper: initial acceleration from the equation of motion; for a linear
+    /// model, the factorization of `M + γΔtD + βΔt²K`.
+    pub fn new(
+        model: &dyn DynamicModel,
+        initial: &State,
+        dt: f64,
+        newton: NewtonSettings,
+    ) -> Result<Self, SimError> {
+        let n = model.n_dofs();
+        let core = ImplicitCore::new("newmark", model, BETA * dt * dt, GAMMA * dt, newton)?;
+        let a = initial_acceleration(model, initial)?;
+        Ok(Self {
+            dt,
+            core,
+            a_new: a.clone(),
+            a,
+            q_hat: vec![0.0; n],
+            v_hat: vec![0.0; n],
+            steps: 0,
+        })
+    }
+}
+
+impl super::Stepper for Newmark {
+    fn step(
+        &mut self,
+        model: &dyn DynamicModel,
+        state: &mut State,
+        dt: f64,
+    ) -> Result<(), SimError> {
+        check_fixed_dt("newmark", self.dt, dt)?;
+        self.steps += 1;
+        for i in 0..state.q.len() {
+            self.q_hat[i] = state.q[i] + dt * state.v[i] + (0.5 - BETA) * dt * dt * self.a[i];
+            self.v_hat[i] = state.v[i] + (1.0 - GAMMA) * dt * self.a[i];
+        }
+        self.a_new.copy_from_slice(&self.a);
+        let t_new = state.t + dt;
+        self.core.solve(
+            model,
+            &self.q_hat,
+            &self.v_hat,
+            t_new,
+            &mut self.a_new,
+            self.steps,
+        )?;
+        for i in 0..state.q.len() {
+            state.q[i] = self.q_hat[i] + self.core.cq * self.a_new[i];
+            state.v[i] = self.v_hat[i] + self.core.cv * self.a_new[i];
+        }
+        std::mem::swap(&mut self.a, &mut self.a_new);
+        state.t = t_new;
+        Ok(())
+    }
+}

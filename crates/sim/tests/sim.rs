@@ -1,0 +1,699 @@
+//! Integration tests of nurbspring-sim: closed-form solutions, convergence orders, energy,
+//! stability limits, divergence, cancellation, dof maps.
+
+mod support;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use nurbspring_linalg::{DenseMatrix, SparseMatrix, SpdSolver};
+use nurbspring_sim::*;
+use support::{
+    Chain, Duffing, Opaque, assert_order, initial_positions, initial_velocities, max_abs_diff, tol,
+};
+
+/// Runs `simulate` and returns the final state.
+fn run(
+    model: &dyn DynamicModel,
+    kind: IntegratorKind,
+    q0: &[f64],
+    v0: &[f64],
+    dt: f64,
+    t_end: f64,
+) -> State {
+    let opts = RunOptions::new(dt, t_end, kind);
+    run_with(model, q0, v0, &opts).unwrap()
+}
+
+fn run_with(
+    model: &dyn DynamicModel,
+    q0: &[f64],
+    v0: &[f64],
+    opts: &RunOptions,
+) -> Result<State, SimError> {
+    let mut last = State::new(q0.to_vec(), v0.to_vec());
+    let mut obs = |s: &Sample<'_>| {
+        last.t = s.t;
+        last.q.copy_from_slice(s.q);
+        last.v.copy_from_slice(s.v);
+    };
+    simulate(model, State::new(q0.to_vec(), v0.to_vec()), opts, &mut obs)?;
+    Ok(last)
+}
+
+fn chain() -> Chain {
+    Chain {
+        n: 8,
+        k: 3.0,
+        m: 0.5,
+    }
+}
+
+/// Equilibrium `rest + K⁻¹ f` of a linear model.
+fn equilibrium(model: &LinearModel) -> Vec<f64> {
+    let u = SpdSolver::new(&model.stiffness)
+        .unwrap()
+        .solve(&model.force);
+    u.iter().zip(&model.rest).map(|(a, b)| a + b).collect()
+}
+
+fn loaded_chain_model(c: &Chain) -> LinearModel {
+    let mut model = c.model();
+    model.rest = (0..c.n).map(|i| 0.1 * i as f64).collect();
+    model.force = (0..c.n).map(|i| 0.4 - 0.1 * i as f64).collect();
+    model
+}
+
+// ------------------------------------------------------------------ names and validation
+
+#[test]
+fn integrator_names_round_trip() {
+    for kind in IntegratorKind::ALL {
+        assert_eq!(IntegratorKind::parse(kind.name()), Some(kind));
+    }
+    assert_eq!(
+        IntegratorKind::parse("velocity-verlet"),
+        Some(IntegratorKind::VelocityVerlet)
+    );
+    assert_eq!(IntegratorKind::parse("euler"), None);
+    let explicit: Vec<_> = IntegratorKind::ALL
+        .into_iter()
+        .filter(|k| k.is_explicit())
+        .collect();
+    assert_eq!(
+        explicit,
+        vec![
+            IntegratorKind::SymplecticEuler,
+            IntegratorKind::VelocityVerlet,
+            IntegratorKind::Rk4
+        ]
+    );
+}
+
+#[test]
+fn invalid_inputs_are_rejected() {
+    let c = chain();
+    let model = c.model();
+    let q0 = initial_positions(c.n);
+    let v0 = vec![0.0; c.n];
+    for dt in [0.0, -1.0, f64::NAN] {
+        let e = run_with(
+            &model,
+            &q0,
+            &v0,
+            &RunOptions::new(dt, 1.0, IntegratorKind::Newmark),
+        )
+        .unwrap_err();
+        assert!(matches!(e, SimError::InvalidTimeStep { .. }));
+    }
+    let e = run_with(
+        &model,
+        &q0,
+        &v0,
+        &RunOptions::new(0.1, f64::INFINITY, IntegratorKind::Newmark),
+    )
+    .unwrap_err();
+    assert!(matches!(e, SimError::InvalidDuration { .. }));
+    let e = run_with(
+        &model,
+        &q0[..3],
+        &v0[..3],
+        &RunOptions::new(0.1, 1.0, IntegratorKind::Newmark),
+    )
+    .unwrap_err();
+    assert!(matches!(
+        e,
+        SimError::DimensionMismatch {
+            expected: 8,
+            found: 3,
+            ..
+        }
+    ));
+    // Unsupported combinations.
+    let duffing = Duffing::new(&c, 1.0);
+    let s = State::new(q0.clone(), v0.clone());
+    for kind in [IntegratorKind::TerzopoulosQin, IntegratorKind::Modal] {
+        assert!(matches!(
+            make_stepper(kind, &duffing, &s, 0.01),
+            Err(SimError::NotSupported { .. })
+        ));
+    }
+    let mut damped = c.model();
+    damped.damping = Some(SystemMatrix::Diagonal(vec![0.1; c.n]));
+    assert!(matches!(
+        make_stepper(IntegratorKind::Modal, &damped, &s, 0.01),
+        Err(SimError::NotSupported { .. })
+    ));
+    let mut consistent = c.model();
+    consistent.mass = SystemMatrix::Sparse(
+        SparseMatrix::linear_combination(0.5, &SparseMatrix::identity(c.n), 0.01, &c.stiffness())
+            .unwrap(),
+    );
+    for kind in [
+        IntegratorKind::SymplecticEuler,
+        IntegratorKind::VelocityVerlet,
+        IntegratorKind::Rk4,
+    ] {
+        assert!(matches!(
+            make_stepper(kind, &consistent, &s, 0.01),
+            Err(SimError::NotSupported { .. })
+        ));
+    }
+    // ... but the implicit schemes accept a consistent mass.
+    run(&consistent, IntegratorKind::Newmark, &q0, &v0, 0.05, 0.5);
+}
+
+// ------------------------------------------------------------------ exact and energy
+
+#[test]
+fn modal_integrator_equals_closed_form() {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let q_eq = equilibrium(&model);
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let dt = 0.05;
+    let mut worst = 0.0_f64;
+    let mut obs =
+        |s: &Sample<'_>| worst = worst.max(max_abs_diff(s.q, &c.exact(&q_eq, &q0, &v0, s.t)));
+    let summary = simulate(
+        &model,
+        State::new(q0.clone(), v0.clone()),
+        &RunOptions::new(dt, 20.0, IntegratorKind::Modal),
+        &mut obs,
+    )
+    .unwrap();
+    assert_eq!(summary.steps, 400);
+    assert!(worst < tol::MODAL, "modal vs closed form: {worst:e}");
+}
+
+#[test]
+fn newmark_conserves_energy_without_damping() {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let mut energies = Vec::new();
+    let mut obs = |s: &Sample<'_>| energies.push(s.kinetic + s.potential);
+    simulate(
+        &model,
+        State::new(q0, v0),
+        &RunOptions::new(0.1, 200.0, IntegratorKind::Newmark),
+        &mut obs,
+    )
+    .unwrap();
+    assert_eq!(energies.len(), 2001);
+    let e0 = energies[0];
+    let drift = energies.iter().fold(0.0_f64, |m, e| m.max((e - e0).abs())) / e0.abs();
+    assert!(
+        drift < tol::ENERGY_ROUNDOFF,
+        "Newmark energy drift {drift:e}"
+    );
+}
+
+#[test]
+fn observer_sees_initial_state_and_every_step() {
+    let c = chain();
+    let model = c.model();
+    let q0 = initial_positions(c.n);
+    let mut steps = Vec::new();
+    let mut obs = |s: &Sample<'_>| steps.push((s.step, s.t));
+    let summary = simulate(
+        &model,
+        State::new(q0, vec![0.0; c.n]),
+        &RunOptions::new(0.1, 1.0, IntegratorKind::BackwardEuler),
+        &mut obs,
+    )
+    .unwrap();
+    assert_eq!(summary.steps, 10);
+    assert!((summary.t_final - 1.0).abs() < 1e-15);
+    assert_eq!(steps.len(), 11);
+    assert_eq!(steps[0], (0, 0.0));
+    assert!(
+        steps
+            .iter()
+            .enumerate()
+            .all(|(k, &(s, t))| s == k && (t - 0.1 * k as f64).abs() < 1e-15)
+    );
+    assert_eq!(summary.omega_max, None);
+}
+
+// ------------------------------------------------------------------ Terzopoulos–Qin
+
+#[test]
+fn terzopoulos_qin_amplification_per_step() {
+    // Single dof, M = 1, K = ω²: each step multiplies the mode by (1 + ω²Δt²)^(-1/2). For the
+    // two-term recurrence, D_n = q_{n+1} q_{n-1} − q_n² scales by the product of the roots = r².
+    let omega: f64 = 2.0;
+    let dt = 0.1;
+    let model = LinearModel::new(
+        SystemMatrix::Diagonal(vec![1.0]),
+        SparseMatrix::from_diagonal(&[omega * omega]),
+    );
+    let mut state = State::new(vec![1.0], vec![0.3]);
+    let mut stepper = make_stepper(IntegratorKind::TerzopoulosQin, &model, &state, dt).unwrap();
+    let mut q = vec![state.q[0] - dt * state.v[0], state.q[0]];
+    for _ in 0..30 {
+        stepper.step(&model, &mut state, dt).unwrap();
+        q.push(state.q[0]);
+    }
+    let r2 = 1.0 / (1.0 + omega * omega * dt * dt);
+    for n in 1..q.len() - 2 {
+        let d0 = q[n + 1] * q[n - 1] - q[n] * q[n];
+        let d1 = q[n + 2] * q[n] - q[n + 1] * q[n + 1];
+        assert!(
+            (d1 / d0 - r2).abs() < tol::AMPLIFICATION,
+            "step {n}: {} vs {r2}",
+            d1 / d0
+        );
+    }
+    // The amplitude decays: TQ is dissipative.
+    assert!(q.last().unwrap().abs() < 1.0);
+}
+
+#[test]
+fn terzopoulos_qin_converges_at_first_order_to_modal() {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let q_eq = equilibrium(&model);
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let t_end = 1.0;
+    let exact = c.exact(&q_eq, &q0, &v0, t_end);
+    let modal = run(&model, IntegratorKind::Modal, &q0, &v0, 0.01, t_end);
+    assert!(max_abs_diff(&modal.q, &exact) < tol::MODAL);
+    let err = |dt: f64| {
+        max_abs_diff(
+            &run(&model, IntegratorKind::TerzopoulosQin, &q0, &v0, dt, t_end).q,
+            &modal.q,
+        )
+    };
+    let (e1, e2, e3) = (err(0.004), err(0.002), err(0.001));
+    assert_order("terzopoulos-qin", e1 / e2, 1);
+    assert_order("terzopoulos-qin", e2 / e3, 1);
+}
+
+#[test]
+fn terzopoulos_qin_with_damping_reaches_the_static_equilibrium() {
+    let c = chain();
+    let mut model = loaded_chain_model(&c);
+    model.damping = Some(SystemMatrix::Diagonal(vec![2.0; c.n]));
+    let q_eq = equilibrium(&model);
+    let end = run(
+        &model,
+        IntegratorKind::TerzopoulosQin,
+        &initial_positions(c.n),
+        &initial_velocities(c.n),
+        0.05,
+        200.0,
+    );
+    assert!(
+        max_abs_diff(&end.q, &q_eq) < 1e-10,
+        "{:e}",
+        max_abs_diff(&end.q, &q_eq)
+    );
+}
+
+// ------------------------------------------------------------------ convergence orders (linear)
+
+fn order_on_chain(kind: IntegratorKind, dts: [f64; 3], order: i32) {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let q_eq = equilibrium(&model);
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let t_end = 1.0;
+    let exact = c.exact(&q_eq, &q0, &v0, t_end);
+    let err = |dt: f64| max_abs_diff(&run(&model, kind, &q0, &v0, dt, t_end).q, &exact);
+    let e: Vec<f64> = dts.iter().map(|&dt| err(dt)).collect();
+    assert_order(kind.name(), e[0] / e[1], order);
+    assert_order(kind.name(), e[1] / e[2], order);
+}
+
+#[test]
+fn rk4_converges_at_fourth_order() {
+    order_on_chain(IntegratorKind::Rk4, [0.04, 0.02, 0.01], 4);
+}
+
+#[test]
+fn backward_euler_converges_at_first_order() {
+    order_on_chain(IntegratorKind::BackwardEuler, [0.004, 0.002, 0.001], 1);
+}
+
+#[test]
+fn newmark_converges_at_second_order() {
+    order_on_chain(IntegratorKind::Newmark, [0.04, 0.02, 0.01], 2);
+}
+
+#[test]
+fn verlet_converges_at_second_order_and_symplectic_euler_at_first() {
+    order_on_chain(IntegratorKind::VelocityVerlet, [0.04, 0.02, 0.01], 2);
+    order_on_chain(IntegratorKind::SymplecticEuler, [0.004, 0.002, 0.001], 1);
+}
+
+// ------------------------------------------------------------------ symplectic energy behaviour
+
+#[test]
+fn symplectic_schemes_keep_energy_bounded_over_1e5_steps() {
+    let c = Chain {
+        n: 5,
+        k: 1.0,
+        m: 1.0,
+    };
+    let model = c.model();
+    let q0 = initial_positions(c.n);
+    let limit = stability_limit(&model, &q0).unwrap();
+    let dt = 0.3 * limit.dt_critical;
+    for (kind, bound) in [
+        (IntegratorKind::SymplecticEuler, 0.5),
+        (IntegratorKind::VelocityVerlet, 0.05),
+    ] {
+        let mut e0 = None;
+        let (mut early, mut late) = (0.0_f64, 0.0_f64);
+        let mut obs = |s: &Sample<'_>| {
+            let e = s.kinetic + s.potential;
+            let e0 = *e0.get_or_insert(e);
+            let dev = (e - e0).abs() / e0;
+            if s.step <= 10_000 {
+                early = early.max(dev);
+            } else if s.step > 90_000 {
+                late = late.max(dev);
+            }
+        };
+        let summary = simulate(
+            &model,
+            State::new(q0.clone(), vec![0.0; c.n]),
+            &RunOptions::new(dt, 100_000.0 * dt, kind),
+            &mut obs,
+        )
+        .unwrap();
+        assert_eq!(summary.steps, 100_000);
+        assert!(
+            early < bound,
+            "{kind}: energy error {early} in the first 10⁴ steps"
+        );
+        // No drift: the last 10⁴ steps are no worse than the first 10⁴ (up to round-off).
+        assert!(
+            late <= early * 1.05 + 1e-12,
+            "{kind}: energy error grew from {early:e} to {late:e}"
+        );
+    }
+}
+
+// ------------------------------------------------------------------ stability limit
+
+#[test]
+fn stability_limit_matches_the_analytic_highest_frequency() {
+    let c = chain();
+    let model = c.model();
+    let limit = stability_limit(&model, &vec![0.0; c.n]).unwrap();
+    let w = c.omega(c.n);
+    assert!((limit.omega_max - w).abs() < tol::OMEGA * w);
+    assert!((limit.dt_critical - 2.0 / w).abs() < tol::OMEGA * 2.0 / w);
+}
+
+#[test]
+fn explicit_schemes_refuse_above_the_limit_diverge_when_forced_and_stay_bounded_below() {
+    let c = chain();
+    let model = c.model();
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let dt_crit = stability_limit(&model, &q0).unwrap().dt_critical;
+    let amplitude = q0.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    for kind in [
+        IntegratorKind::SymplecticEuler,
+        IntegratorKind::VelocityVerlet,
+        IntegratorKind::Rk4,
+    ] {
+        // Above the limit: refused.
+        let above = 1.01 * dt_crit;
+        let e = run_with(
+            &model,
+            &q0,
+            &v0,
+            &RunOptions::new(above, 2000.0 * above, kind),
+        )
+        .unwrap_err();
+        match e {
+            SimError::Unstable {
+                dt, dt_critical, ..
+            } => {
+                assert_eq!(dt, above);
+                assert!((dt_critical - dt_crit).abs() < 1e-12 * dt_crit);
+            }
+            other => panic!("{kind}: expected Unstable, got {other:?}"),
+        }
+        // Forced: diverges. RK4's own limit is 2√2/ω_max, so force it beyond that.
+        let forced_dt = if kind == IntegratorKind::Rk4 {
+            1.5 * dt_crit
+        } else {
+            above
+        };
+        let mut opts = RunOptions::new(forced_dt, 5000.0 * forced_dt, kind);
+        opts.force_unstable = true;
+        match run_with(&model, &q0, &v0, &opts).unwrap_err() {
+            SimError::Diverged { step, time, .. } => {
+                assert!(step > 1 && step < 5000, "{kind}: diverged at step {step}");
+                assert!((time - step as f64 * forced_dt).abs() < 1e-9 * time);
+            }
+            other => panic!("{kind}: expected Diverged, got {other:?}"),
+        }
+        // Just below: runs and stays bounded.
+        let below = 0.99 * dt_crit;
+        let mut peak = 0.0_f64;
+        let mut obs =
+            |s: &Sample<'_>| peak = peak.max(s.q.iter().fold(0.0_f64, |m, x| m.max(x.abs())));
+        let summary = simulate(
+            &model,
+            State::new(q0.clone(), v0.clone()),
+            &RunOptions::new(below, 20_000.0 * below, kind),
+            &mut obs,
+        )
+        .unwrap();
+        assert_eq!(summary.dt_critical, Some(dt_crit));
+        assert!(
+            peak < 50.0 * (amplitude + 1.0),
+            "{kind}: peak {peak} just below the limit"
+        );
+    }
+}
+
+// ------------------------------------------------------------------ cancellation
+
+#[test]
+fn cancel_flag_stops_after_the_current_step() {
+    let c = chain();
+    let model = c.model();
+    let flag = Arc::new(AtomicBool::new(false));
+    let mut opts = RunOptions::new(0.01, 10.0, IntegratorKind::Newmark);
+    opts.cancel = Some(flag.clone());
+    let mut seen = 0;
+    let mut obs = |s: &Sample<'_>| {
+        seen += 1;
+        if s.step == 5 {
+            flag.store(true, Ordering::Relaxed);
+        }
+    };
+    let summary = simulate(
+        &model,
+        State::new(initial_positions(c.n), vec![0.0; c.n]),
+        &opts,
+        &mut obs,
+    )
+    .unwrap();
+    assert!(summary.cancelled);
+    assert_eq!(summary.steps, 5);
+    assert!((summary.t_final - 0.05).abs() < 1e-15);
+    assert_eq!(seen, 6);
+}
+
+// ------------------------------------------------------------------ nonlinear (Newton)
+
+fn duffing_reference(model: &Duffing, q0: &[f64], v0: &[f64], t_end: f64) -> Vec<f64> {
+    let mut opts = RunOptions::new(2e-4, t_end, IntegratorKind::Rk4);
+    opts.force_unstable = false;
+    run_with(model, q0, v0, &opts).unwrap().q
+}
+
+#[test]
+fn newton_schemes_converge_on_a_duffing_chain() {
+    let c = Chain {
+        n: 4,
+        k: 2.0,
+        m: 1.0,
+    };
+    let mut model = Duffing::new(&c, 8.0);
+    model.force = vec![0.1, 0.0, -0.2, 0.05];
+    let q0: Vec<f64> = vec![0.5, -0.3, 0.4, 0.2];
+    let v0 = vec![0.0, 0.5, 0.0, -0.2];
+    let t_end = 1.0;
+    let reference = duffing_reference(&model, &q0, &v0, t_end);
+    let err = |kind: IntegratorKind, dt: f64| {
+        max_abs_diff(&run(&model, kind, &q0, &v0, dt, t_end).q, &reference)
+    };
+    let be: Vec<f64> = [0.004, 0.002, 0.001]
+        .iter()
+        .map(|&dt| err(IntegratorKind::BackwardEuler, dt))
+        .collect();
+    assert_order("backward-euler (Duffing)", be[0] / be[1], 1);
+    assert_order("backward-euler (Duffing)", be[1] / be[2], 1);
+    let nm: Vec<f64> = [0.02, 0.01, 0.005]
+        .iter()
+        .map(|&dt| err(IntegratorKind::Newmark, dt))
+        .collect();
+    assert_order("newmark (Duffing)", nm[0] / nm[1], 2);
+    assert_order("newmark (Duffing)", nm[1] / nm[2], 2);
+    // Newmark on the nonlinear model conserves energy up to O(Δt²) (it is not exact here).
+    let mut e = Vec::new();
+    let mut obs = |s: &Sample<'_>| e.push(s.kinetic + s.potential);
+    simulate(
+        &model,
+        State::new(q0.clone(), v0.clone()),
+        &RunOptions::new(0.01, 10.0, IntegratorKind::Newmark),
+        &mut obs,
+    )
+    .unwrap();
+    let drift = e.iter().fold(0.0_f64, |m, x| m.max((x - e[0]).abs())) / e[0].abs();
+    assert!(drift < 1e-3, "Newmark energy drift on Duffing {drift:e}");
+}
+
+#[test]
+fn newton_fails_cleanly_with_too_few_iterations() {
+    let c = Chain {
+        n: 4,
+        k: 2.0,
+        m: 1.0,
+    };
+    let model = Duffing::new(&c, 50.0);
+    let q0 = vec![0.8, -0.6, 0.7, 0.5];
+    let mut opts = RunOptions::new(0.05, 1.0, IntegratorKind::BackwardEuler);
+    opts.max_newton_iterations = 1;
+    opts.newton_tolerance = 1e-14;
+    match run_with(&model, &q0, &[0.0; 4], &opts).unwrap_err() {
+        SimError::NewtonFailed {
+            step,
+            iterations,
+            residual,
+            ..
+        } => {
+            assert_eq!(step, 1);
+            assert_eq!(iterations, 1);
+            assert!(residual > 1e-14);
+        }
+        other => panic!("expected NewtonFailed, got {other:?}"),
+    }
+}
+
+#[test]
+fn backward_euler_falls_back_to_lu_for_an_indefinite_newton_matrix() {
+    // K = −κ I (an unstable "compressed" spring), large Δt: M + Δt²K is negative definite, so
+    // Cholesky fails and the LU path must give the exact backward Euler step
+    // q⁺ = (q + Δt v)/(1 − Δt²κ/m).
+    let (kappa, m, dt) = (4.0, 1.0, 1.0);
+    let k = SparseMatrix::from_triplets(
+        2,
+        2,
+        &[(0, 0, -kappa), (1, 1, -kappa), (0, 1, 0.0), (1, 0, 0.0)],
+    )
+    .unwrap();
+    let model = Opaque(LinearModel::new(SystemMatrix::Diagonal(vec![m, m]), k));
+    let mut state = State::new(vec![1.0, -0.5], vec![0.2, 0.1]);
+    let (q, v) = (state.q.clone(), state.v.clone());
+    let mut stepper = make_stepper(IntegratorKind::BackwardEuler, &model, &state, dt).unwrap();
+    stepper.step(&model, &mut state, dt).unwrap();
+    for i in 0..2 {
+        let q_new = (q[i] + dt * v[i]) / (1.0 - dt * dt * kappa / m);
+        assert!(
+            (state.q[i] - q_new).abs() < tol::EXACT,
+            "{} vs {q_new}",
+            state.q[i]
+        );
+        assert!((state.v[i] - (q_new - q[i]) / dt).abs() < tol::EXACT);
+    }
+}
+
+#[test]
+fn implicit_linear_and_newton_paths_agree() {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let opaque = Opaque(loaded_chain_model(&c));
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    for kind in [IntegratorKind::Newmark, IntegratorKind::BackwardEuler] {
+        let a = run(&model, kind, &q0, &v0, 0.05, 2.0);
+        let b = run(&opaque, kind, &q0, &v0, 0.05, 2.0);
+        assert!(
+            max_abs_diff(&a.q, &b.q) < 1e-9,
+            "{kind}: {:e}",
+            max_abs_diff(&a.q, &b.q)
+        );
+    }
+}
+
+// ------------------------------------------------------------------ dof map
+
+#[test]
+fn dof_map_restrict_extend_and_matrices() {
+    let n = 7;
+    let map = DofMap::new(n, &[5, 1, 5, 0]).unwrap();
+    assert_eq!(map.fixed(), &[0, 1, 5]);
+    assert_eq!(map.free(), &[2, 3, 4, 6]);
+    assert_eq!((map.n_total(), map.n_free()), (7, 4));
+    assert!(map.is_fixed(5) && !map.is_fixed(6));
+    assert_eq!(map.free_index(4), Some(2));
+    assert_eq!(map.free_index(1), None);
+    assert!(matches!(
+        DofMap::new(3, &[3]),
+        Err(SimError::DimensionMismatch { .. })
+    ));
+    let full: Vec<f64> = (0..n).map(|i| i as f64 * 1.5 - 2.0).collect();
+    let free = map.restrict(&full);
+    assert_eq!(map.extend(&free, &full), full);
+    let mut out = vec![-9.0; n];
+    map.extend_into(&free, &mut out);
+    assert!((0..n).all(|i| if map.is_fixed(i) {
+        out[i] == -9.0
+    } else {
+        out[i] == full[i]
+    }));
+    // Matrices against dense slicing.
+    let dense = DenseMatrix::from_fn(n, n, |i, j| {
+        if (i + 2 * j) % 3 == 0 {
+            (i * n + j) as f64 + 1.0
+        } else {
+            0.0
+        }
+    });
+    let a = SparseMatrix::from_dense(&dense, 0.0);
+    let aff = map.restrict_matrix(&a).to_dense();
+    let afc = map.coupling_matrix(&a).to_dense();
+    assert_eq!(
+        aff,
+        DenseMatrix::from_fn(4, 4, |i, j| dense[(map.free()[i], map.free()[j])])
+    );
+    assert_eq!(
+        afc,
+        DenseMatrix::from_fn(4, 3, |i, j| dense[(map.free()[i], map.fixed()[j])])
+    );
+    // Eliminating fixed dofs: A_ff x_f = b_f − A_fc x_c reproduces the full solution.
+    let all = DofMap::all_free(n);
+    assert_eq!(all.n_free(), n);
+    assert!(all.fixed().is_empty());
+}
+
+#[test]
+fn linear_model_energy_and_forces_are_consistent() {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    model.validate().unwrap();
+    let q = initial_positions(c.n);
+    // f_int = ∇E by central differences (E quadratic: exact up to round-off).
+    let mut f = vec![0.0; c.n];
+    model.internal_force(&q, &mut f);
+    let h = 1e-4;
+    for i in 0..c.n {
+        let (mut qp, mut qm) = (q.clone(), q.clone());
+        qp[i] += h;
+        qm[i] -= h;
+        let g = (model.potential_energy(&qp) - model.potential_energy(&qm)) / (2.0 * h);
+        assert!((g - f[i]).abs() < 1e-9, "{i}: {g} vs {}", f[i]);
+    }
+    assert_eq!(model.potential_energy(&model.rest), 0.0);
+    let m = SystemMatrix::Diagonal(vec![2.0; 3]);
+    assert_eq!(m.quadratic_form(&[1.0, 2.0, 3.0]), 28.0);
+    assert_eq!(m.to_sparse().diagonal(), vec![2.0; 3]);
+}

@@ -1,0 +1,190 @@
+//! Shared test support for nurbspring-sim: tolerances, test models and closed-form solutions.
+#![allow(dead_code)]
+
+use nurbspring_linalg::SparseMatrix;
+use nurbspring_sim::{DynamicModel, LinearModel, SystemMatrix};
+
+/// Tolerances, in one place, each near the real error of the method it checks.
+pub mod tol {
+    /// Exact schemes (modal) vs closed form: round-off accumulated over ~10³ steps of dense
+    /// mat-vecs on well-conditioned mode shapes.
+    pub const MODAL: f64 = 1e-11;
+    /// Relative energy drift of Newmark with D = 0 over 2000 steps: round-off only.
+    pub const ENERGY_ROUNDOFF: f64 = 1e-11;
+    /// Observed convergence ratio err(Δt)/err(Δt/2) must be within this factor of 2^p.
+    pub const ORDER_RATIO: f64 = 0.12;
+    /// Per-step amplification of a single mode vs its formula: round-off.
+    pub const AMPLIFICATION: f64 = 1e-9;
+    /// Exact linear algebra in a few operations.
+    pub const EXACT: f64 = 1e-13;
+    /// ω_max from Lanczos vs analytic (Lanczos tolerance 1e-8 in λ).
+    pub const OMEGA: f64 = 1e-6;
+}
+
+/// Checks that `ratio` ≈ 2^order within [`tol::ORDER_RATIO`] relative.
+pub fn assert_order(name: &str, ratio: f64, order: i32) {
+    let expected = 2f64.powi(order);
+    assert!(
+        (ratio / expected - 1.0).abs() < tol::ORDER_RATIO,
+        "{name}: error ratio {ratio:.4} for halved Δt, expected ≈ {expected} (order {order})"
+    );
+}
+
+/// A chain of `n` masses `m` joined by springs `k`, both ends fixed: `K = k·tridiag(−1, 2, −1)`,
+/// `M = m I`. Modes `φ_j(i) = sin(i jπ/(n+1))`, `ω_j = 2√(k/m) sin(jπ/(2(n+1)))`.
+pub struct Chain {
+    pub n: usize,
+    pub k: f64,
+    pub m: f64,
+}
+
+impl Chain {
+    pub fn stiffness(&self) -> SparseMatrix {
+        let mut t = Vec::new();
+        for i in 0..self.n {
+            t.push((i, i, 2.0 * self.k));
+            if i + 1 < self.n {
+                t.push((i, i + 1, -self.k));
+                t.push((i + 1, i, -self.k));
+            }
+        }
+        SparseMatrix::from_triplets(self.n, self.n, &t).unwrap()
+    }
+
+    pub fn model(&self) -> LinearModel {
+        LinearModel::new(
+            SystemMatrix::Diagonal(vec![self.m; self.n]),
+            self.stiffness(),
+        )
+    }
+
+    pub fn omega(&self, j: usize) -> f64 {
+        2.0 * (self.k / self.m).sqrt()
+            * ((j as f64) * std::f64::consts::PI / (2.0 * (self.n as f64 + 1.0))).sin()
+    }
+
+    fn mode(&self, j: usize, i: usize) -> f64 {
+        (((i + 1) * j) as f64 * std::f64::consts::PI / (self.n as f64 + 1.0)).sin()
+    }
+
+    /// Closed-form free vibration about `q_eq`: `q(t) = q_eq + Σ_j φ_j (a_j cos ω_j t + b_j/ω_j sin ω_j t)`.
+    pub fn exact(&self, q_eq: &[f64], q0: &[f64], v0: &[f64], t: f64) -> Vec<f64> {
+        let n = self.n;
+        let norm = 2.0 / (n as f64 + 1.0);
+        let mut q = q_eq.to_vec();
+        for j in 1..=n {
+            let a: f64 = norm
+                * (0..n)
+                    .map(|i| self.mode(j, i) * (q0[i] - q_eq[i]))
+                    .sum::<f64>();
+            let b: f64 = norm * (0..n).map(|i| self.mode(j, i) * v0[i]).sum::<f64>();
+            let w = self.omega(j);
+            let c = a * (w * t).cos() + b / w * (w * t).sin();
+            for i in 0..n {
+                q[i] += c * self.mode(j, i);
+            }
+        }
+        q
+    }
+}
+
+/// Deterministic, non-symmetric initial data exciting every mode.
+pub fn initial_positions(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| 0.3 * ((i as f64 + 1.0) * 1.7).sin() + 0.05 * i as f64)
+        .collect()
+}
+
+pub fn initial_velocities(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| 0.2 * ((i as f64 + 0.5) * 2.3).cos())
+        .collect()
+}
+
+/// A Duffing chain: the linear chain plus a cubic grounding spring at every mass,
+/// `f_int(q) = K q + ε q³`, `K_T = K + diag(3ε q²)`, `E = ½qᵀKq + ¼ε Σ q⁴`; optional diagonal
+/// damping and a constant load. Nonlinear: `linear_stiffness()` is `None`.
+pub struct Duffing {
+    pub k: SparseMatrix,
+    pub epsilon: f64,
+    pub mass: SystemMatrix,
+    pub damping: Option<SystemMatrix>,
+    pub force: Vec<f64>,
+}
+
+impl Duffing {
+    pub fn new(chain: &Chain, epsilon: f64) -> Self {
+        Self {
+            k: chain.stiffness(),
+            epsilon,
+            mass: SystemMatrix::Diagonal(vec![chain.m; chain.n]),
+            damping: None,
+            force: vec![0.0; chain.n],
+        }
+    }
+}
+
+impl DynamicModel for Duffing {
+    fn n_dofs(&self) -> usize {
+        self.k.nrows()
+    }
+    fn mass(&self) -> &SystemMatrix {
+        &self.mass
+    }
+    fn damping(&self) -> Option<&SystemMatrix> {
+        self.damping.as_ref()
+    }
+    fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+        self.k.mul_vec(q, out);
+        for (o, x) in out.iter_mut().zip(q) {
+            *o += self.epsilon * x * x * x;
+        }
+    }
+    fn external_force(&self, _t: f64, out: &mut [f64]) {
+        out.copy_from_slice(&self.force);
+    }
+    fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+        let d: Vec<f64> = q.iter().map(|x| 3.0 * self.epsilon * x * x).collect();
+        SparseMatrix::linear_combination(1.0, &self.k, 1.0, &SparseMatrix::from_diagonal(&d))
+            .unwrap()
+    }
+    fn potential_energy(&self, q: &[f64]) -> f64 {
+        0.5 * self.k.quadratic_form(q)
+            + 0.25 * self.epsilon * q.iter().map(|x| x.powi(4)).sum::<f64>()
+    }
+    fn external_potential(&self, _t: f64, q: &[f64]) -> f64 {
+        -q.iter().zip(&self.force).map(|(a, b)| a * b).sum::<f64>()
+    }
+}
+
+/// A linear model hidden behind the nonlinear interface (`linear_stiffness()` is `None`), so
+/// the Newton paths run on it; `stiffness` may be indefinite.
+pub struct Opaque(pub LinearModel);
+
+impl DynamicModel for Opaque {
+    fn n_dofs(&self) -> usize {
+        self.0.n_dofs()
+    }
+    fn mass(&self) -> &SystemMatrix {
+        self.0.mass()
+    }
+    fn damping(&self) -> Option<&SystemMatrix> {
+        self.0.damping()
+    }
+    fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+        self.0.internal_force(q, out)
+    }
+    fn external_force(&self, t: f64, out: &mut [f64]) {
+        self.0.external_force(t, out)
+    }
+    fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+        self.0.tangent_stiffness(q)
+    }
+    fn potential_energy(&self, q: &[f64]) -> f64 {
+        self.0.potential_energy(q)
+    }
+}
+
+pub fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
+}
