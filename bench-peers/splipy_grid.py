@@ -18,6 +18,17 @@ import splipy
 
 KNOTS = [0.0, 0.0, 0.0, 0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.0, 1.0, 1.0]
 
+# nurbspring-geom's NurbsSurface::grid on linspace(0, 1, 1000)² at a few grid points, as printed
+# by bench-peers/benches/peers.rs; splipy must agree (same surface, same parameters).
+NURBSPRING = {
+    (0, 0): [0.0, 0.0, 0.0],
+    (123, 456): [0.2015787800928498, 0.4641257537270454, 0.19586289074975227],
+    (500, 500): [0.49722640132080165, 0.5034543317447567, 0.23502372128753593],
+    (999, 1): [1.0, 0.0017211132292181007, 0.004280218982899106],
+    (999, 999): [1.0, 1.0, 0.0],
+}
+NURBSPRING_CHECKSUM = 1.208028652310036e6
+
 
 
 def patch():
@@ -43,9 +54,11 @@ def main():
     print(f"splipy {md.version('splipy')}, numpy {md.version('numpy')}")
     print(f"grid 1000x1000: min {min(times) * 1e3:.1f} ms, median {statistics.median(times) * 1e3:.1f} ms "
           f"over {len(times)} runs")
-    print(f"checksum sum(x + y + z) = {grid.sum():.15e}")
-    for (i, j) in [(0, 0), (123, 456), (500, 500), (999, 1), (999, 999)]:
-        print(f"  point[{i}][{j}] = {grid[i, j].tolist()}")
+    print(f"checksum sum(x + y + z) = {grid.sum():.15e} (nurbspring {NURBSPRING_CHECKSUM:.15e})")
+    worst = max(abs(a - b) for (i, j), p in NURBSPRING.items() for a, b in zip(grid[i, j], p))
+    assert worst < 1e-14, worst
+    assert abs(grid.sum() - NURBSPRING_CHECKSUM) < 1e-12 * NURBSPRING_CHECKSUM
+    print(f"agrees with nurbspring at {len(NURBSPRING)} grid points to {worst:.1e}")
     # Per-point (scattered) evaluation, for reference: the same 4096 LCG parameters.
     state = 0x2545F4914F6CDD1D
     ps = []

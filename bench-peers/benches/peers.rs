@@ -21,7 +21,11 @@ const KNOTS: [f64; 12] = [0., 0., 0., 0., 0.2, 0.4, 0.6, 0.8, 1., 1., 1., 1.];
 
 fn point(i: usize, j: usize) -> ([f64; 3], f64) {
     (
-        [i as f64 / 7.0, j as f64 / 7.0, ((3 * i + 5 * j) % 7) as f64 / 14.0],
+        [
+            i as f64 / 7.0,
+            j as f64 / 7.0,
+            ((3 * i + 5 * j) % 7) as f64 / 14.0,
+        ],
         1.0 + ((i + 2 * j) % 3) as f64 / 4.0,
     )
 }
@@ -78,9 +82,17 @@ fn bench_point(c: &mut Criterion) {
     let mut worst = 0.0f64;
     for &(u, v) in &ps {
         let q = t.point_at(u, v);
-        worst = worst.max(agree(s.point(u, v).unwrap(), [q.x, q.y, q.z], 1e-14, "point"));
+        worst = worst.max(agree(
+            s.point(u, v).unwrap(),
+            [q.x, q.y, q.z],
+            1e-14,
+            "point",
+        ));
     }
-    println!("point: nurbspring and curvo agree at {} parameters to {worst:.1e}", ps.len());
+    println!(
+        "point: nurbspring and curvo agree at {} parameters to {worst:.1e}",
+        ps.len()
+    );
     let mut g = c.benchmark_group("peers_point");
     g.throughput(Throughput::Elements(ps.len() as u64));
     g.bench_function("nurbspring", |b| {
@@ -110,7 +122,10 @@ fn bench_grid(c: &mut Criterion) {
     let (s, t) = (ours(), theirs());
     let n = 1000;
     let us = linspace(0.0, 1.0, n);
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     let grid = s.grid(&us, &us).unwrap();
     let sampled = t.regular_sample_points(n - 1, n - 1);
     let mut worst = 0.0f64;
@@ -122,6 +137,12 @@ fn bench_grid(c: &mut Criterion) {
         }
     }
     println!("grid: nurbspring grid() and curvo regular_sample_points agree to {worst:.1e}");
+    // The same figures splipy_grid.py prints, to compare the three libraries' grids.
+    let checksum: f64 = grid.iter().map(|p| p[0] + p[1] + p[2]).sum();
+    println!("grid: nurbspring checksum sum(x + y + z) = {checksum:.15e}");
+    for (i, j) in [(0, 0), (123, 456), (500, 500), (999, 1), (999, 999)] {
+        println!("  point[{i}][{j}] = {:?}", grid[i * n + j]);
+    }
     let mut g = c.benchmark_group("peers_grid_1000x1000");
     g.throughput(Throughput::Elements((n * n) as u64));
     g.sample_size(10);

@@ -536,7 +536,8 @@ fn verdicts(
         });
     }
 
-    // Figure 3 agreement, with the paper's constants and with the derived ones.
+    // Figure 3 agreement, with the paper's constants and with the derived ones: over the
+    // paper's horizon, and over ten times longer.
     for label in ["paper", "derived"] {
         let runs: Vec<&DynamicsReading> = dynamics
             .iter()
@@ -546,37 +547,51 @@ fn verdicts(
             .iter()
             .map(|d| {
                 format!(
-                    "rel. RMS {:.3} ({} net, rest {}; periods D-NURBS {} / MSM {})",
+                    "rel. RMS {:.3} over {} s ({} net, rest {}; periods D-NURBS {} / MSM {}{})",
                     d.relative_rms,
+                    d.t_end,
                     d.net.name(),
                     d.rest_shape,
                     fmt_period(d.dnurbs_period),
-                    fmt_period(d.msm_period)
+                    fmt_period(d.msm_period),
+                    if d.msm_stopped.is_some() { "; MSM run failed" } else { "" }
                 )
             })
             .collect::<Vec<_>>()
             .join("; ");
-        let best = runs
-            .iter()
-            .map(|d| d.relative_rms)
-            .filter(|x| x.is_finite())
-            .fold(f64::INFINITY, f64::min);
-        let verdict = if best < 0.1 {
+        let best = |long: bool| {
+            runs.iter()
+                .filter(|d| (d.t_end > base.t_end * 1.5) == long)
+                .map(|d| d.relative_rms)
+                .filter(|x| x.is_finite())
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (short, long) = (best(false), best(true));
+        let verdict = if short < 0.1 && long < 0.1 {
             Verdict::Reproduced
-        } else if best < 0.3 {
+        } else if short < 0.1 {
             Verdict::Partly
         } else {
             Verdict::NotReproduced
         };
+        let why = match verdict {
+            Verdict::Reproduced => format!("relative RMS {short:.3} over {} s and {long:.3} over {} s (agreement below 0.1)", base.t_end, 10.0 * base.t_end),
+            Verdict::Partly => format!(
+                "relative RMS {short:.3} over the paper's {} s, which is a fraction of the D-NURBS period, but {long:.3} over {} s: the MSM's out-of-plane restoring force is purely geometric (no linear stiffness out of the plane), the D-NURBS bending stiffness is linear, and the two drift apart",
+                base.t_end,
+                10.0 * base.t_end
+            ),
+            _ => format!(
+                "no run with these parameters follows the D-NURBS (best relative RMS {short:.3} over {} s; infinite means the MSM run failed)",
+                base.t_end
+            ),
+        };
         out.push(VerdictLine {
             quantity: format!("Figure 3 agreement of the central node's z ({label} parameters, Newmark)"),
-            paper: "suitable agreement".to_string(),
+            paper: "suitable agreement over 4 s".to_string(),
             obtained,
             verdict,
-            why: format!(
-                "best relative RMS {:.3} (reproduced below 0.1). The MSM's out-of-plane restoring force is purely geometric (zero linear stiffness out of the plane), while the D-NURBS bending stiffness is linear",
-                best
-            ),
+            why,
         });
     }
 

@@ -9,7 +9,8 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nurbspring_dnurbs::{
-    Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material, assemble, assemble_scalar,
+    Assembler, Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material, assemble,
+    assemble_scalar,
 };
 use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_sim::{IntegratorKind, make_stepper};
@@ -47,6 +48,37 @@ fn benches(c: &mut Criterion) {
     group
         .sample_size(10)
         .measurement_time(Duration::from_secs(10));
+    group.bench_function(
+        "pattern only (Assembler::new, once per knot vectors)",
+        |b| b.iter(|| Assembler::new(&geometry, &options).unwrap()),
+    );
+    let assembler = Assembler::new(&geometry, &options).unwrap();
+    group.bench_function("Assembler::assemble_scalar (pattern reused)", |b| {
+        b.iter(|| assembler.assemble_scalar(&geometry, &material()).unwrap())
+    });
+    // Area integration cannot be sum-factorized: the Gauss-point kernel runs instead.
+    let area = DnurbsOptions {
+        integration: nurbspring_dnurbs::Integration::Area,
+        ..options.clone()
+    };
+    let area_assembler = Assembler::new(&geometry, &area).unwrap();
+    group.bench_function(
+        "Assembler::assemble_scalar, area integration (Gauss-point kernel)",
+        |b| {
+            b.iter(|| {
+                area_assembler
+                    .assemble_scalar(&geometry, &material())
+                    .unwrap()
+            })
+        },
+    );
+    group.bench_function("Assembler::assemble (pattern reused, 3N dofs)", |b| {
+        b.iter(|| {
+            assembler
+                .assemble(&geometry, &material(), &Loads::default())
+                .unwrap()
+        })
+    });
     group.bench_function("assemble_scalar (S_M, S_K, N x N)", |b| {
         b.iter(|| assemble_scalar(&geometry, &material(), &options).unwrap())
     });

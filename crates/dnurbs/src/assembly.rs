@@ -9,7 +9,10 @@
 //! matrices `S` and the dof matrices are `S ⊗ I_3` (interleaved ordering, SPEC §1); with weights
 //! as unknowns the kernels fill full `4N × 4N` blocks through the Jacobian with weight columns.
 
-use nurbspring_geom::{Jacobian, LocalRationalBasis, QuadratureElement};
+use nurbspring_geom::{
+    BSplineBasis, BasisScratch, GaussLegendre, Jacobian, LocalRationalBasis, NurbsSurface,
+    QuadratureElement,
+};
 use nurbspring_linalg::{AssemblyPattern, SparseMatrix};
 use rayon::prelude::*;
 
@@ -101,7 +104,7 @@ pub fn assemble_scalar(
 /// material and loads on the same knots (paper eqs. (3)–(4), SPEC §3).
 pub struct Assembler {
     options: DnurbsOptions,
-    knots: (Vec<f64>, Vec<f64>),
+    knots: (Vec<f64>, Vec<f64>, (usize, usize)),
     kind: AssemblerKind,
 }
 
@@ -116,7 +119,11 @@ impl Assembler {
     pub fn new(geometry: &Geometry, options: &DnurbsOptions) -> Result<Self, DnurbsError> {
         check_quadrature(options.quadrature_points)?;
         let kind = if options.weights_as_dofs {
-            AssemblerKind::General(GeneralAssembler::new(geometry, options.quadrature_points, 4)?)
+            AssemblerKind::General(GeneralAssembler::new(
+                geometry,
+                options.quadrature_points,
+                4,
+            )?)
         } else {
             AssemblerKind::Scalar(ScalarAssembler::new(geometry, options.quadrature_points)?)
         };
@@ -224,14 +231,16 @@ impl Assembler {
     }
 }
 
-/// The knot vectors of a geometry (curves: empty v knots).
-fn knots_of(geometry: &Geometry) -> (Vec<f64>, Vec<f64>) {
+/// The knot vectors and degrees of a geometry (curves: empty v knots).
+fn knots_of(geometry: &Geometry) -> (Vec<f64>, Vec<f64>, (usize, usize)) {
+    let degrees = geometry.degrees();
     match geometry {
         Geometry::Surface(s) => (
             s.basis_u().knots().knots().to_vec(),
             s.basis_v().knots().knots().to_vec(),
+            degrees,
         ),
-        Geometry::Curve(c) => (c.basis().knots().knots().to_vec(), Vec::new()),
+        Geometry::Curve(c) => (c.basis().knots().knots().to_vec(), Vec::new(), degrees),
     }
 }
 
@@ -382,6 +391,7 @@ pub(crate) struct ScalarValues {
 pub(crate) struct ScalarAssembler {
     layout: ElementLayout,
     pattern: AssemblyPattern,
+    quadrature_points: usize,
 }
 
 impl ScalarAssembler {
@@ -390,16 +400,29 @@ impl ScalarAssembler {
         let layout = ElementLayout::new(geometry, quadrature_points)?;
         let n = layout.n_control_points;
         let pattern = AssemblyPattern::new(n, n, &layout.entries(1))?;
-        Ok(Self { layout, pattern })
+        Ok(Self {
+            layout,
+            pattern,
+            quadrature_points,
+        })
     }
 
     /// Fills the element blocks in parallel and sums them (paper eqs. (3)–(4) with `J = R ⊗ I_3`).
+    ///
+    /// A surface with uniform weights integrated over the parameter domain takes the tensor
+    /// (sum-factorized) path: `R_ij = N_i(u) N_j(v)` and the tensor Gauss rule factorize every
+    /// element integral into products of 1D span integrals, e.g. `∫∫ R_uu R_uu = (∫ N'' N'')(∫ N N)`.
     pub(crate) fn run(
         &self,
         geometry: &Geometry,
         material: &Material,
         integration: Integration,
     ) -> ScalarValues {
+        if let (Geometry::Surface(surface), Integration::Parameter) = (geometry, integration)
+            && geometry.has_uniform_weights()
+        {
+            return self.run_tensor(surface, material);
+        }
         let terms = stiffness_terms(geometry, material);
         let order = derivative_order(&terms, integration);
         let nl = self.layout.n_local;
@@ -466,6 +489,115 @@ impl ScalarAssembler {
     }
 }
 
+impl ScalarAssembler {
+    /// The sum-factorized kernel for B-spline surfaces (uniform weights) over the parameter
+    /// domain: element blocks are sums of Kronecker products of 1D span matrices
+    /// (paper eq. (3)–(4) with `R_ij = N_i N_j`).
+    fn run_tensor(&self, surface: &NurbsSurface, material: &Material) -> ScalarValues {
+        let g = self.quadrature_points;
+        let spans_u = span_matrices(surface.basis_u(), g);
+        let spans_v = span_matrices(surface.basis_v(), g);
+        let (wu, wv) = (
+            surface.basis_u().degree() + 1,
+            surface.basis_v().degree() + 1,
+        );
+        let coef = material.stiffness_by_slot();
+        // (slot, u derivative order, v derivative order) of the active stiffness terms.
+        let terms: Vec<(f64, usize, usize)> =
+            [(1, 1, 0), (2, 0, 1), (3, 2, 0), (4, 1, 1), (5, 0, 2)]
+                .iter()
+                .filter(|&&(slot, _, _)| coef[slot] != 0.0)
+                .map(|&(slot, du, dv)| (coef[slot], du, dv))
+                .collect();
+        let find = |spans: &[SpanMatrices], span: usize| {
+            spans
+                .binary_search_by_key(&span, |s| s.span)
+                .expect("every element lies on a non-empty span")
+        };
+        let nl = self.layout.n_local;
+        let block = nl * nl;
+        let n_el = self.layout.elements.len();
+        let mut g0 = vec![0.0; n_el * block];
+        let mut kv = vec![0.0; n_el * block];
+        let mut rint = vec![0.0; n_el * nl];
+        g0.par_chunks_mut(block)
+            .zip(kv.par_chunks_mut(block))
+            .zip(rint.par_chunks_mut(nl))
+            .zip(self.layout.elements.par_iter())
+            .for_each(|(((g0e, ke), re), el)| {
+                let a = &spans_u[find(&spans_u, el.span_u)];
+                let b = &spans_v[find(&spans_v, el.span_v)];
+                for l in 0..nl {
+                    let (ia, ib) = (l / wv, l % wv);
+                    re[l] = a.integrals[ia] * b.integrals[ib];
+                    for c in 0..nl {
+                        let (ic, id) = (c / wv, c % wv);
+                        let (iu, iv) = (ia * wu + ic, ib * wv + id);
+                        g0e[l * nl + c] = a.products[0][iu] * b.products[0][iv];
+                        ke[l * nl + c] = terms
+                            .iter()
+                            .map(|&(k, du, dv)| k * a.products[du][iu] * b.products[dv][iv])
+                            .sum();
+                    }
+                }
+            });
+        let mut basis_integrals = vec![0.0; self.layout.n_control_points];
+        for (e, re) in rint.chunks_exact(nl).enumerate() {
+            for (&k, &r) in self.layout.element(e).iter().zip(re) {
+                basis_integrals[k] += r;
+            }
+        }
+        ScalarValues {
+            unit_mass: self.pattern.assemble(&g0),
+            stiffness: self.pattern.assemble(&kv),
+            basis_integrals,
+        }
+    }
+}
+
+/// 1D integrals over one non-empty knot span: `products[d]` is `∫ N^(d)_i N^(d)_j` (row-major
+/// `(p+1)²`, d = 0, 1, 2) and `integrals` is `∫ N_i`, by the g-point Gauss rule.
+struct SpanMatrices {
+    span: usize,
+    products: [Vec<f64>; 3],
+    integrals: Vec<f64>,
+}
+
+/// [`SpanMatrices`] of every non-empty span of `basis` (The NURBS Book A2.3 at the Gauss points).
+fn span_matrices(basis: &BSplineBasis, g: usize) -> Vec<SpanMatrices> {
+    let p = basis.degree();
+    let w = p + 1;
+    let rule = GaussLegendre::new(g.max(1)).unwrap_or_else(|_| unreachable!("g ≥ 1 was checked"));
+    let mut scratch = BasisScratch::default();
+    let mut d = vec![0.0; 3 * w];
+    basis
+        .knots()
+        .nonempty_spans()
+        .into_iter()
+        .map(|(span, a, b)| {
+            let mut products = [vec![0.0; w * w], vec![0.0; w * w], vec![0.0; w * w]];
+            let mut integrals = vec![0.0; w];
+            for (x, weight) in rule.mapped(a, b) {
+                basis.derivatives_into(span, x, 2, &mut d, &mut scratch);
+                for i in 0..w {
+                    integrals[i] += weight * d[i];
+                    for (k, prod) in products.iter_mut().enumerate() {
+                        let di = weight * d[k * w + i];
+                        for j in 0..w {
+                            prod[i * w + j] += di * d[k * w + j];
+                        }
+                    }
+                }
+            }
+            SpanMatrices {
+                span,
+                products,
+                integrals,
+            }
+        })
+        .collect()
+}
+
 /// Copies the upper triangle of a row-major `n × n` block onto the lower one.
 fn mirror_upper(a: &mut [f64], n: usize) {
     for i in 0..n {
@@ -509,7 +641,7 @@ impl GeneralAssembler {
         Ok(Self { layout, pattern, m })
     }
 
-    /// The common pattern of every matrix `run` returns (an all-zero assembly).
+    /// Number of dofs (rows and columns) of the matrices `run` returns.
     pub(crate) fn n_dofs(&self) -> usize {
         self.layout.n_control_points * self.m
     }

@@ -21,6 +21,12 @@
 //! assert!((area - 1.0).abs() < 1e-14);
 //! // The Jacobian has 16 non-zero blocks.
 //! assert_eq!(s.jacobian(0.3, 0.3, 2, false).unwrap().n_local(), 16);
+//! // Uniform refinement (A5.4) as a matrix: P^w_fine = C P^w_coarse, same surface.
+//! let (fine, c) = s.refine_uniform(1).unwrap();
+//! assert_eq!((fine.n_u(), fine.n_v()), (7 + 4, 5 + 2));
+//! assert_eq!((c.nrows, c.ncols), (77, 35));
+//! let (a, b) = (s.point(0.3, 0.8).unwrap(), fine.point(0.3, 0.8).unwrap());
+//! assert!((0..3).all(|x| (a[x] - b[x]).abs() < 1e-14));
 //! # let _ = Deriv::UV;
 //! ```
 

@@ -4,9 +4,9 @@
 //! Each operation returns the new knot vector and a sparse matrix `C` with
 //! `P^w_new = C P^w_old` in homogeneous coordinates `P^w = (w x, w y, w z, w)`. `C` depends only
 //! on the knot vectors, not on the control points, and the new basis reproduces the old one:
-//! `N_old_j = Σ_i C_ij N_new_i`. Because every row of `C` sums to one the new weights
-//! `w_new = C w_old` are positive, and for non-rational geometry (all weights 1)
-//! `P_new = C P_old` directly. Surfaces use `C = C_u ⊗ C_v` with the flat index `i · n_v + j`.
+//! `N_old_j = Σ_i C_ij N_new_i`. `C` is non-negative with rows summing to one, so the new
+//! weights `w_new = C w_old` are convex combinations of the old ones (positive), and for
+//! non-rational geometry (all weights 1) `P_new = C P_old` directly. Surfaces use `C = C_u ⊗ C_v` with the flat index `i · n_v + j`.
 //!
 //! The algorithms (A5.1, A5.4, A5.9) are run once on the unit rows `e_j` of the old control net
 //! — they are linear in the control points — which yields the rows of `C`; the geometry is then
@@ -546,11 +546,26 @@ pub fn span_subdivision_knots(knots: &KnotVector, parts: usize) -> Vec<f64> {
 
 /// Uniform refinement: `levels` rounds of midpoint insertion, i.e. every non-empty span split
 /// into `2^levels` equal sub-spans, inserted at once by [`refine_knots`] (A5.4).
+///
+/// ```
+/// use nurbspring_geom::{KnotVector, refine_uniform};
+/// let u = KnotVector::try_new(vec![0., 0., 0., 1., 1., 1.], 2).unwrap();
+/// let (new, c) = refine_uniform(&u, 2).unwrap();
+/// assert_eq!(new.knots(), &[0., 0., 0., 0.25, 0.5, 0.75, 1., 1., 1.]);
+/// assert_eq!((c.nrows, c.ncols), (6, 3));
+/// ```
+///
+/// # Panics
+/// If `2^levels` overflows `usize`.
 pub fn refine_uniform(
     knots: &KnotVector,
     levels: u32,
 ) -> Result<(KnotVector, RefinementMatrix), GeomError> {
-    refine_knots(knots, &span_subdivision_knots(knots, 1usize << levels))
+    let parts = 1usize
+        .checked_shl(levels)
+        .filter(|&p| p != 0)
+        .expect("refine_uniform: 2^levels overflows usize");
+    refine_knots(knots, &span_subdivision_knots(knots, parts))
 }
 
 fn binomial(n: usize, k: usize) -> f64 {

@@ -47,8 +47,8 @@ fn nurbs_book_example_5_1() {
     assert_close(&c4.to_dense(), &expected, MATRIX_ENTRY, "Ex. 5.1 by A5.4");
 }
 
-/// The NURBS Book Ex. 5.2-style check: inserting an existing knot up to multiplicity p makes
-/// the curve interpolate a control point there (the curve point at a knot of multiplicity p).
+/// Inserting a knot up to multiplicity p makes the curve interpolate a control point there:
+/// at a knot of multiplicity p the curve point is a control point.
 #[test]
 fn full_multiplicity_insertion_interpolates() {
     let c = reference_curve();

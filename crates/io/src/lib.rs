@@ -28,6 +28,7 @@ pub mod atomic;
 mod error;
 pub mod output;
 pub mod plot;
+pub mod scene;
 pub mod vtk;
 
 pub use error::OutputError;

@@ -91,7 +91,11 @@ pub struct PlotOptions {
 
 impl PlotOptions {
     /// Linear axes, 1024 × 640 pixels.
-    pub fn new(title: impl Into<String>, x_label: impl Into<String>, y_label: impl Into<String>) -> Self {
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+    ) -> Self {
         Self {
             title: title.into(),
             x_label: x_label.into(),
@@ -214,7 +218,8 @@ pub fn plot_series_with(
             ));
         }
     };
-    if options.width < 200 || options.height < 150 || options.width > 8192 || options.height > 8192 {
+    if options.width < 200 || options.height < 150 || options.width > 8192 || options.height > 8192
+    {
         return Err(OutputError::invalid(
             path,
             format!(
@@ -255,8 +260,15 @@ pub fn plot_series_with(
         } else {
             "non-finite"
         };
-        let noun = if summary.skipped == 1 { "point" } else { "points" };
-        format!("{} ({} {what} {noun} omitted)", options.title, summary.skipped)
+        let noun = if summary.skipped == 1 {
+            "point"
+        } else {
+            "points"
+        };
+        format!(
+            "{} ({} {what} {noun} omitted)",
+            options.title, summary.skipped
+        )
     } else {
         options.title.clone()
     };
@@ -298,7 +310,9 @@ pub fn plot_series_with(
 
 /// Axis range covering `values` with a 5 % margin (a unit range when empty or degenerate).
 fn linear_range(values: impl Iterator<Item = f64>) -> Range<f64> {
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+        (l.min(v), h.max(v))
+    });
     if lo > hi {
         return 0.0..1.0;
     }
@@ -317,11 +331,17 @@ fn linear_range(values: impl Iterator<Item = f64>) -> Range<f64> {
 
 /// Positive axis range for a log scale, padded by a factor 1.5 at each end.
 fn log_range(values: impl Iterator<Item = f64>) -> Range<f64> {
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+        (l.min(v), h.max(v))
+    });
     if lo > hi {
         return 0.1..10.0;
     }
-    let (lo, hi) = if lo == hi { (lo / 10.0, hi * 10.0) } else { (lo / 1.5, hi * 1.5) };
+    let (lo, hi) = if lo == hi {
+        (lo / 10.0, hi * 10.0)
+    } else {
+        (lo / 1.5, hi * 1.5)
+    };
     let lo = if lo > 0.0 { lo } else { f64::MIN_POSITIVE };
     let hi = if hi.is_finite() { hi } else { f64::MAX };
     lo..hi
@@ -423,7 +443,10 @@ where
         let has_markers = matches!(s.style, SeriesStyle::Points | SeriesStyle::LinePoints);
         if has_line {
             let anno = chart
-                .draw_series(LineSeries::new(s.points.iter().copied(), color.stroke_width(2)))
+                .draw_series(LineSeries::new(
+                    s.points.iter().copied(),
+                    color.stroke_width(2),
+                ))
                 .map_err(|e| e.to_string())?;
             anno.label(s.name.as_str()).legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))

@@ -187,7 +187,9 @@ impl VtkUnstructured {
                 return Err(format!("cell {c} has no points"));
             }
             if let Some(&k) = cell.points().iter().find(|&&k| k >= n) {
-                return Err(format!("cell {c} refers to point {k}, but there are {n} points"));
+                return Err(format!(
+                    "cell {c} refers to point {k}, but there are {n} points"
+                ));
             }
         }
         check_arrays("point", &self.point_data, n)?;
@@ -322,7 +324,11 @@ impl VtkStructured {
             .flat_map(|j| (0..nu).map(move |i| (i, j)))
             .map(|(i, j)| self.points[i * nv + j])
             .collect();
-        let pd: Vec<DataArray> = self.point_data.iter().map(|a| transpose(a, nu, nv)).collect();
+        let pd: Vec<DataArray> = self
+            .point_data
+            .iter()
+            .map(|a| transpose(a, nu, nv))
+            .collect();
         let cd: Vec<DataArray> = self
             .cell_data
             .iter()
@@ -559,7 +565,12 @@ impl XmlWriter {
         Ok(())
     }
 
-    fn array(&mut self, name: Option<&str>, components: usize, payload: Payload<'_>) -> Result<(), String> {
+    fn array(
+        &mut self,
+        name: Option<&str>,
+        components: usize,
+        payload: Payload<'_>,
+    ) -> Result<(), String> {
         let name_attr = name
             .map(|n| format!(" Name=\"{}\"", escape(n)))
             .unwrap_or_default();
@@ -596,7 +607,8 @@ impl XmlWriter {
                     payload.type_name()
                 );
                 let per_line = if components > 1 { components * 3 } else { 9 };
-                self.out.push_str(&payload.ascii(per_line, &format!("{ind}  ")));
+                self.out
+                    .push_str(&payload.ascii(per_line, &format!("{ind}  ")));
                 let _ = writeln!(self.out, "{ind}</DataArray>");
             }
         }

@@ -1,6 +1,8 @@
 //! Figures: SVG text content, PNG decoding and non-blankness, non-finite input.
 
-use nurbspring_io::plot::{PlotOptions, Series, SeriesStyle, plot_series, plot_series_with, plot_spectrum};
+use nurbspring_io::plot::{
+    PlotOptions, Series, SeriesStyle, plot_series, plot_series_with, plot_spectrum,
+};
 
 /// Where to put figures: a temporary folder, or `$NURBSPRING_KEEP_PLOTS` to look at them.
 fn out_dir() -> (Option<tempfile::TempDir>, std::path::PathBuf) {
@@ -20,10 +22,18 @@ fn out_dir() -> (Option<tempfile::TempDir>, std::path::PathBuf) {
 fn trajectories() -> Vec<Series> {
     let t: Vec<f64> = (0..=50).map(|k| 0.08 * k as f64).collect();
     vec![
-        Series::line("D-NURBS", t.iter().map(|&t| (t, 2.0 - 0.05 * (1.3 * t).sin())).collect()),
+        Series::line(
+            "D-NURBS",
+            t.iter()
+                .map(|&t| (t, 2.0 - 0.05 * (1.3 * t).sin()))
+                .collect(),
+        ),
         Series {
             name: "MSM (symplectic Euler)".into(),
-            points: t.iter().map(|&t| (t, 2.0 - 0.045 * (1.2 * t).sin())).collect(),
+            points: t
+                .iter()
+                .map(|&t| (t, 2.0 - 0.045 * (1.2 * t).sin()))
+                .collect(),
             style: SeriesStyle::LinePoints,
         },
     ]
@@ -38,7 +48,12 @@ fn svg_contains_title_labels_and_series_names() {
     assert_eq!(s.drawn, 102);
     let svg = std::fs::read_to_string(&p).unwrap();
     assert!(svg.starts_with("<svg"), "{}", &svg[..50]);
-    for needle in ["Central node z(t)", "t [s]", "D-NURBS", "MSM (symplectic Euler)"] {
+    for needle in [
+        "Central node z(t)",
+        "t [s]",
+        "D-NURBS",
+        "MSM (symplectic Euler)",
+    ] {
         assert!(svg.contains(needle), "missing {needle}");
     }
 }
@@ -64,7 +79,10 @@ fn png_decodes_and_has_text_and_curves() {
     let dark = |c: &[u8; 3]| c.iter().all(|&v| v < 100);
     // The caption (black text) occupies the top band.
     let title_dark = (0..40 * w as usize).filter(|&k| dark(&px[k])).count();
-    assert!(title_dark > 100, "no caption text rendered ({title_dark} dark pixels)");
+    assert!(
+        title_dark > 100,
+        "no caption text rendered ({title_dark} dark pixels)"
+    );
     // Both series colours appear.
     let count = |rgb: [u8; 3]| px.iter().filter(|&&c| c == rgb).count();
     assert!(count([31, 119, 180]) > 200);
@@ -77,7 +95,10 @@ fn non_finite_points_are_skipped_and_reported() {
     let mut s = trajectories();
     s[0].points[3].1 = f64::NAN;
     s[1].points[7].0 = f64::INFINITY;
-    s.push(Series::line("diverged", vec![(0.0, f64::NAN), (1.0, f64::NEG_INFINITY)]));
+    s.push(Series::line(
+        "diverged",
+        vec![(0.0, f64::NAN), (1.0, f64::NEG_INFINITY)],
+    ));
     for ext in ["svg", "png"] {
         let p = dir.join(format!("nonfinite.{ext}"));
         let summary = plot_series(&p, "with gaps", "t", "z", &s).unwrap();
@@ -90,7 +111,14 @@ fn non_finite_points_are_skipped_and_reported() {
     }
     // Nothing drawable at all still gives a figure with axes.
     let p = dir.join("empty.png");
-    let summary = plot_series(&p, "nothing", "t", "z", &[Series::line("nan", vec![(f64::NAN, 1.0)])]).unwrap();
+    let summary = plot_series(
+        &p,
+        "nothing",
+        "t",
+        "z",
+        &[Series::line("nan", vec![(f64::NAN, 1.0)])],
+    )
+    .unwrap();
     assert_eq!(summary.drawn, 0);
     assert_eq!(decode(&p).0, 1024);
 }
@@ -120,7 +148,13 @@ fn spectrum_plot_has_both_sets() {
     let msm = [0.7, 2.0, 2.4, f64::NAN, 4.2];
     for ext in ["svg", "png"] {
         let p = dir.join(format!("spectrum.{ext}"));
-        let s = plot_spectrum(&p, "Eigenfrequencies", "ω [rad/s]", &[("D-NURBS", &dn), ("MSM", &msm)]).unwrap();
+        let s = plot_spectrum(
+            &p,
+            "Eigenfrequencies",
+            "ω [rad/s]",
+            &[("D-NURBS", &dn), ("MSM", &msm)],
+        )
+        .unwrap();
         assert_eq!((s.drawn, s.skipped), (8, 1));
     }
     let svg = std::fs::read_to_string(dir.join("spectrum.svg")).unwrap();

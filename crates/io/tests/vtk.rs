@@ -29,17 +29,32 @@ fn sample() -> VtkUnstructured {
     g.cells = cells;
     g.point_data.push(DataArray::vectors(
         "velocity <v>",
-        &[[0.0, 0.0, -0.2], [0.1, 0.2, 0.3], [f64::MIN_POSITIVE, 1.0, 2.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]],
+        &[
+            [0.0, 0.0, -0.2],
+            [0.1, 0.2, 0.3],
+            [f64::MIN_POSITIVE, 1.0, 2.0],
+            [4.0, 5.0, 6.0],
+            [7.0, 8.0, 9.0],
+        ],
     ));
-    g.point_data.push(DataArray::scalars("mass", vec![0.005; 5]));
-    g.cell_data.push(DataArray::scalars("k", vec![0.0, 2.7225, 0.8661, 1.0, 2.0, 3.0]));
-    g.cell_data.push(DataArray::new("pair", 2, (0..12).map(|k| k as f64 * 0.1).collect()));
+    g.point_data
+        .push(DataArray::scalars("mass", vec![0.005; 5]));
+    g.cell_data.push(DataArray::scalars(
+        "k",
+        vec![0.0, 2.7225, 0.8661, 1.0, 2.0, 3.0],
+    ));
+    g.cell_data.push(DataArray::new(
+        "pair",
+        2,
+        (0..12).map(|k| k as f64 * 0.1).collect(),
+    ));
     g
 }
 
 /// Reads a `.vtu` back and checks every value against `g`.
 fn check_vtu(path: &std::path::Path, g: &VtkUnstructured) {
-    let vtk = Vtk::import(path).unwrap_or_else(|e| panic!("vtkio cannot read {}: {e:?}", path.display()));
+    let vtk =
+        Vtk::import(path).unwrap_or_else(|e| panic!("vtkio cannot read {}: {e:?}", path.display()));
     let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
         panic!("not an unstructured grid")
     };
@@ -50,10 +65,18 @@ fn check_vtu(path: &std::path::Path, g: &VtkUnstructured) {
     let pts: Vec<f64> = piece.points.clone().into_vec().expect("Float64 points");
     let want: Vec<f64> = g.points.iter().flatten().copied().collect();
     assert_eq!(bits(&pts), bits(&want));
-    let VertexNumbers::XML { connectivity, offsets } = &piece.cells.cell_verts else {
+    let VertexNumbers::XML {
+        connectivity,
+        offsets,
+    } = &piece.cells.cell_verts
+    else {
         panic!("legacy cell numbering")
     };
-    let conn: Vec<u64> = g.cells.iter().flat_map(|c| c.points().iter().map(|&k| k as u64)).collect();
+    let conn: Vec<u64> = g
+        .cells
+        .iter()
+        .flat_map(|c| c.points().iter().map(|&k| k as u64))
+        .collect();
     assert_eq!(connectivity, &conn);
     let mut end = 0;
     let offs: Vec<u64> = g
@@ -103,14 +126,30 @@ fn vtu_binary_uint32_and_ascii_read_back_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let g = sample();
     let p32 = dir.path().join("h32.vtu");
-    g.write_with(&p32, VtkFormat { encoding: VtkEncoding::Binary, header: HeaderType::UInt32 })
-        .unwrap();
-    assert!(std::fs::read_to_string(&p32).unwrap().contains("header_type=\"UInt32\""));
+    g.write_with(
+        &p32,
+        VtkFormat {
+            encoding: VtkEncoding::Binary,
+            header: HeaderType::UInt32,
+        },
+    )
+    .unwrap();
+    assert!(
+        std::fs::read_to_string(&p32)
+            .unwrap()
+            .contains("header_type=\"UInt32\"")
+    );
     check_vtu(&p32, &g);
     // ASCII cannot carry 1e300 through every VTK reader, but vtkio parses Rust's shortest form.
     let pa = dir.path().join("ascii.vtu");
-    g.write_with(&pa, VtkFormat { encoding: VtkEncoding::Ascii, header: HeaderType::UInt64 })
-        .unwrap();
+    g.write_with(
+        &pa,
+        VtkFormat {
+            encoding: VtkEncoding::Ascii,
+            header: HeaderType::UInt64,
+        },
+    )
+    .unwrap();
     check_vtu(&pa, &g);
 }
 
@@ -121,7 +160,10 @@ fn binary_header_counts_the_data_bytes() {
     let g = sample();
     for (header, size) in [(HeaderType::UInt64, 8usize), (HeaderType::UInt32, 4)] {
         let xml = g
-            .to_xml(VtkFormat { encoding: VtkEncoding::Binary, header })
+            .to_xml(VtkFormat {
+                encoding: VtkEncoding::Binary,
+                header,
+            })
             .unwrap();
         let mut blocks = 0;
         let mut rest = xml.as_str();
@@ -166,23 +208,40 @@ fn vts_reads_back_with_u_as_first_index() {
     let p = dir.path().join("surface.vts");
     let (nu, nv) = (4, 3);
     let pts: Vec<[f64; 3]> = (0..nu)
-        .flat_map(|i| (0..nv).map(move |j| [i as f64 / 3.0, 2.5 * j as f64, 2.0 + 0.01 * (i * nv + j) as f64]))
+        .flat_map(|i| {
+            (0..nv).map(move |j| {
+                [
+                    i as f64 / 3.0,
+                    2.5 * j as f64,
+                    2.0 + 0.01 * (i * nv + j) as f64,
+                ]
+            })
+        })
         .collect();
     let mut g = VtkStructured::new(nu, nv, pts.clone());
-    g.point_data.push(DataArray::scalars("k", (0..nu * nv).map(|k| k as f64).collect()));
+    g.point_data.push(DataArray::scalars(
+        "k",
+        (0..nu * nv).map(|k| k as f64).collect(),
+    ));
     g.cell_data.push(DataArray::new(
         "cell",
         2,
-        (0..(nu - 1) * (nv - 1)).flat_map(|c| [c as f64, -(c as f64)]).collect(),
+        (0..(nu - 1) * (nv - 1))
+            .flat_map(|c| [c as f64, -(c as f64)])
+            .collect(),
     ));
     g.write(&p).unwrap();
     let vtk = Vtk::import(&p).unwrap();
     let DataSet::StructuredGrid { extent, pieces, .. } = vtk.data else {
         panic!("not a structured grid")
     };
-    let Extent::Ranges(r) = extent else { panic!("extent") };
+    let Extent::Ranges(r) = extent else {
+        panic!("extent")
+    };
     assert_eq!(r, [0..=3, 0..=2, 0..=0]);
-    let Piece::Inline(piece) = &pieces[0] else { panic!() };
+    let Piece::Inline(piece) = &pieces[0] else {
+        panic!()
+    };
     let read: Vec<f64> = piece.points.clone().into_vec().unwrap();
     // VTK order: first index (u) fastest.
     for j in 0..nv {
@@ -191,7 +250,9 @@ fn vts_reads_back_with_u_as_first_index() {
             assert_eq!(&read[3 * v..3 * v + 3], &pts[i * nv + j][..]);
         }
     }
-    let Attribute::DataArray(k) = &piece.data.point[0] else { panic!() };
+    let Attribute::DataArray(k) = &piece.data.point[0] else {
+        panic!()
+    };
     let kv: Vec<f64> = k.data.clone().into_vec().unwrap();
     assert_eq!(kv[1], 3.0); // VTK point (i=1, j=0) is nurbspring point 1 * n_v + 0
     // vtkio 0.7.0-rc2 counts the cells of a flat extent as (nx-1)(ny-1)(nz-1) = 0 and so drops
@@ -204,7 +265,10 @@ fn vts_reads_back_with_u_as_first_index() {
     let bytes = base64::engine::general_purpose::STANDARD
         .decode(cell_section[start..end].trim())
         .unwrap();
-    assert_eq!(u64::from_le_bytes(bytes[..8].try_into().unwrap()), 6 * 2 * 8);
+    assert_eq!(
+        u64::from_le_bytes(bytes[..8].try_into().unwrap()),
+        6 * 2 * 8
+    );
     let cv: Vec<f64> = bytes[8..]
         .chunks(8)
         .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
@@ -217,7 +281,11 @@ fn vts_reads_back_with_u_as_first_index() {
             assert_eq!(&cv[2 * v..2 * v + 2], &[c, -c]);
         }
     }
-    assert!(VtkStructured::new(1, 3, vec![[0.0; 3]; 3]).write(&p).is_err());
+    assert!(
+        VtkStructured::new(1, 3, vec![[0.0; 3]; 3])
+            .write(&p)
+            .is_err()
+    );
 }
 
 #[test]

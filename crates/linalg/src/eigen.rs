@@ -340,7 +340,6 @@ struct RitzPairs {
     residuals: Vec<f64>,
     vectors: Vec<Vec<f64>>,
     converged: bool,
-    steps: usize,
 }
 
 /// Lanczos with full reorthogonalization for an operator `op` self-adjoint in the B-inner
@@ -370,7 +369,6 @@ fn lanczos_largest(
             residuals: Vec::new(),
             vectors: Vec::new(),
             converged: true,
-            steps: 0,
         });
     }
     let m_max = m_max.min(avail).max(k);
@@ -406,7 +404,6 @@ fn lanczos_largest(
             residuals: Vec::new(),
             vectors: Vec::new(),
             converged: true,
-            steps: 0,
         });
     };
     basis.push(&v0);
@@ -496,7 +493,6 @@ fn lanczos_largest(
         residuals,
         vectors,
         converged,
-        steps: size,
     })
 }
 

@@ -4,7 +4,7 @@
 use nurbspring_geom::NurbsSurface;
 use nurbspring_linalg::SparseMatrix;
 
-use crate::spring::{node, sub};
+use crate::spring::sub;
 use crate::stiffness::Coefficient;
 use crate::topology::Topology;
 use crate::{MAX_NODES, MsmError, Spring, SpringKind};
@@ -534,11 +534,6 @@ impl SpringLattice {
     /// Current spring lengths at `x`.
     pub fn spring_lengths(&self, x: &[f64]) -> Vec<f64> {
         self.springs.iter().map(|s| s.length(x)).collect()
-    }
-
-    /// Position of node `a` in an interleaved vector `x`.
-    pub fn node_position(x: &[f64], a: usize) -> [f64; 3] {
-        node(x, a)
     }
 }
 

@@ -119,7 +119,8 @@ pub(crate) fn stiffness_block(k: f64, l: f64, d: [f64; 3]) -> [[f64; 3]; 3] {
 }
 
 impl Spring {
-    /// Current length `|x_a − x_b|` for interleaved positions `x` (SPEC §1 ordering).
+    /// Current length `|x_a − x_b|` for interleaved positions `x` (SPEC §1 ordering). Like every
+    /// per-spring method, panics when a node index is out of range of `x`.
     pub fn length(&self, x: &[f64]) -> f64 {
         norm(sub(node(x, self.a), node(x, self.b)))
     }

@@ -670,6 +670,22 @@ fn dof_map_restrict_extend_and_matrices() {
         DenseMatrix::from_fn(4, 3, |i, j| dense[(map.free()[i], map.fixed()[j])])
     );
     // Eliminating fixed dofs: A_ff x_f = b_f − A_fc x_c reproduces the full solution.
+    let lap = Chain { n, k: 1.0, m: 1.0 }.stiffness();
+    let x_full: Vec<f64> = (0..n).map(|i| (i as f64 * 0.9).cos()).collect();
+    let mut b = vec![0.0; n];
+    lap.mul_vec(&x_full, &mut b);
+    let x_fixed: Vec<f64> = map.fixed().iter().map(|&d| x_full[d]).collect();
+    let mut rhs = map.restrict(&b);
+    map.coupling_matrix(&lap)
+        .mul_vec_add(-1.0, &x_fixed, &mut rhs);
+    let x_free = SpdSolver::new(&map.restrict_matrix(&lap))
+        .unwrap()
+        .solve(&rhs);
+    let mut fixed_only = vec![0.0; n];
+    for &d in map.fixed() {
+        fixed_only[d] = x_full[d];
+    }
+    assert!(max_abs_diff(&map.extend(&x_free, &fixed_only), &x_full) < tol::EXACT);
     let all = DofMap::all_free(n);
     assert_eq!(all.n_free(), n);
     assert!(all.fixed().is_empty());

@@ -137,7 +137,13 @@ fn refinement_invariance_of_dof_matrices_for_a_curve() {
 /// `M p = ∫ μ Jᵀ c`, and scaling every weight (which leaves c unchanged) is a null vector.
 #[test]
 fn weights_as_dofs_blocks_and_scaling_null_space() {
-    let geometry = Geometry::Surface(support::wavy_rational_patch());
+    // The B-spline patch also checks the sum-factorized scalar path against the general kernel.
+    for surface in [support::wavy_patch(), support::wavy_rational_patch()] {
+        weights_as_dofs_case(Geometry::Surface(surface));
+    }
+}
+
+fn weights_as_dofs_case(geometry: Geometry) {
     let material = all_terms();
     let o3 = DnurbsOptions::default();
     let o4 = DnurbsOptions {
@@ -319,4 +325,41 @@ fn more_quadrature_points_change_nothing_for_b_splines() {
     let s6 = assemble_scalar(&g, &all_terms(), &o6).unwrap();
     assert!(support::rel_diff(&s6.mass, &s4.mass) <= tol::SAME);
     assert!(support::rel_diff(&s6.stiffness, &s4.stiffness) <= tol::SAME);
+}
+
+#[test]
+fn assembler_reuses_its_pattern_on_the_same_knots() {
+    let coarse = support::wavy_rational_patch();
+    let moved: Vec<[f64; 3]> = coarse
+        .control_points()
+        .iter()
+        .map(|p| [p[0], p[1] + 0.1 * p[0], 2.0 * p[2]])
+        .collect();
+    let moved = Geometry::Surface(coarse.with_control_points(moved).unwrap());
+    let loads = Loads {
+        gravity: [0.0, -1.0, 0.0],
+        ..Loads::default()
+    };
+    for weights_as_dofs in [false, true] {
+        let o = DnurbsOptions {
+            weights_as_dofs,
+            integration: Integration::Area,
+            ..DnurbsOptions::default()
+        };
+        let assembler =
+            nurbspring_dnurbs::Assembler::new(&Geometry::Surface(coarse.clone()), &o).unwrap();
+        let reused = assembler.assemble(&moved, &all_terms(), &loads).unwrap();
+        let fresh = assemble(&moved, &all_terms(), &loads, &o).unwrap();
+        assert_eq!(reused.mass, fresh.mass);
+        assert_eq!(reused.stiffness, fresh.stiffness);
+        assert_eq!(reused.force, fresh.force);
+        let other = Geometry::Surface(support::paper_surface());
+        assert!(matches!(
+            assembler.assemble(&other, &all_terms(), &loads),
+            Err(nurbspring_dnurbs::DnurbsError::InvalidOption {
+                name: "geometry",
+                ..
+            })
+        ));
+    }
 }

@@ -1,7 +1,9 @@
 //! Property tests (proptest) of the assembled matrices on random rational patches, and
 //! finite-difference checks of the model's force against its energy.
 
-use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material, assemble};
+use nurbspring_dnurbs::{
+    Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material, assemble,
+};
 use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_linalg::SpdSolver;
 use nurbspring_sim::DynamicModel;
@@ -13,7 +15,9 @@ fn random_patch(p: usize, spans: usize, z: &[f64], w: &[f64]) -> NurbsSurface {
     let k = KnotVector::clamped_uniform(p, spans).unwrap();
     let g = k.greville();
     let n = g.len();
-    let pts: Vec<[f64; 3]> = (0..n * n).map(|i| [2.0 * g[i / n], 3.0 * g[i % n], z[i % z.len()]]).collect();
+    let pts: Vec<[f64; 3]> = (0..n * n)
+        .map(|i| [2.0 * g[i / n], 3.0 * g[i % n], z[i % z.len()]])
+        .collect();
     let weights = (0..n * n).map(|i| w[i % w.len()]).collect();
     NurbsSurface::try_new(k.clone(), k, pts, weights).unwrap()
 }
@@ -68,10 +72,24 @@ proptest! {
 fn internal_force_is_the_gradient_of_the_energy() {
     let model = DnurbsModel::new(
         Geometry::Surface(support::wavy_rational_patch()),
-        Material { mu: 1.0, alpha11: 0.5, alpha22: 0.7, beta11: 0.1, beta12: 0.05, beta22: 0.2, ..Material::default() },
+        Material {
+            mu: 1.0,
+            alpha11: 0.5,
+            alpha22: 0.7,
+            beta11: 0.1,
+            beta12: 0.05,
+            beta22: 0.2,
+            ..Material::default()
+        },
         Loads::default(),
-        &Constraints { fixed_rings: 1, ..Constraints::default() },
-        DnurbsOptions { rest_shape: nurbspring_dnurbs::RestShape::Zero, ..DnurbsOptions::default() },
+        &Constraints {
+            fixed_rings: 1,
+            ..Constraints::default()
+        },
+        DnurbsOptions {
+            rest_shape: nurbspring_dnurbs::RestShape::Zero,
+            ..DnurbsOptions::default()
+        },
     )
     .unwrap();
     let n = model.n_dofs();
@@ -86,7 +104,11 @@ fn internal_force_is_the_gradient_of_the_energy() {
         qp[i] += h;
         qm[i] -= h;
         let fd = (model.potential_energy(&qp) - model.potential_energy(&qm)) / (2.0 * h);
-        assert!((fd - f[i]).abs() <= tol::FINITE_DIFFERENCE * scale, "dof {i}: {fd} vs {}", f[i]);
+        assert!(
+            (fd - f[i]).abs() <= tol::FINITE_DIFFERENCE * scale,
+            "dof {i}: {fd} vs {}",
+            f[i]
+        );
     }
     let k = model.tangent_stiffness(&q);
     assert_eq!(&k, model.linear_stiffness().unwrap());

@@ -2,7 +2,7 @@
 //! the constant-weight motion; with free weights it converges as Δt → 0.
 
 use nurbspring_dnurbs::{
-    Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, RationalStepper,
+    Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material, RationalStepper,
 };
 use nurbspring_sim::{IntegratorKind, make_stepper};
 
@@ -16,7 +16,11 @@ fn model(
 ) -> DnurbsModel {
     DnurbsModel::new(
         Geometry::Surface(surface),
-        support::paper_material(),
+        // Damped, to cover the D terms of both schemes.
+        Material {
+            gamma: 0.5,
+            ..support::paper_material()
+        },
         Loads {
             gravity: [0.0, 0.0, -0.5],
             ..Loads::default()
@@ -150,4 +154,105 @@ fn frozen_weights_as_dofs_model_is_positive_definite() {
         newmark.step(&m, &mut s, 0.08).unwrap();
     }
     assert!(s.q.iter().all(|v| v.is_finite()));
+}
+
+/// An independent reference for the free-weight motion: RK4 on the continuous equation
+/// `M(p) p̈ = f(p) − K(p)(p − p_rest) − D(p) ṗ − I(p, ṗ) ṗ` (paper eq. (2)) with
+/// `I ṗ = ∫∫ μ Jᵀ J̇ ṗ` and `J̇ ṗ` by a central difference of `J(p + ε ṗ) ṗ` (SPEC §3), on the same
+/// free dofs (gauge weight pinned). The rational stepper must converge to it at first order:
+/// an inconsistent treatment of `I ṗ` would converge (to itself) but not to this.
+#[test]
+fn free_weights_converge_to_an_independent_rk4_reference() {
+    use nurbspring_dnurbs::assemble;
+    use nurbspring_geom::{Deriv, surface_rule};
+    use nurbspring_linalg::{DenseMatrix, cholesky_solve_dense};
+
+    let m = model(true, false, support::paper_surface(), 2);
+    let options = m.options().clone();
+    let free = m.dof_map().free().to_vec();
+    let n = m.p0().len();
+    let surface = match m.geometry() {
+        Geometry::Surface(s) => s.clone(),
+        Geometry::Curve(_) => unreachable!(),
+    };
+    let rule = surface_rule(
+        surface.basis_u(),
+        surface.basis_v(),
+        options.quadrature_points,
+    )
+    .unwrap();
+    let acceleration = |p: &[f64], v: &[f64]| -> Vec<f64> {
+        let geo = m.geometry().with_coordinates(p, true).unwrap();
+        let mats = assemble(&geo, m.material(), m.loads(), &options).unwrap();
+        let mut rhs = mats.force.clone();
+        let d: Vec<f64> = p.iter().zip(m.p_rest()).map(|(a, b)| a - b).collect();
+        mats.stiffness.mul_vec_add(-1.0, &d, &mut rhs);
+        mats.damping.mul_vec_add(-1.0, v, &mut rhs);
+        // −I ṗ = −∫∫ μ Jᵀ (J̇ ṗ).
+        let eps = 1e-6;
+        let plus: Vec<f64> = p.iter().zip(v).map(|(a, b)| a + eps * b).collect();
+        let minus: Vec<f64> = p.iter().zip(v).map(|(a, b)| a - eps * b).collect();
+        let geo_p = m.geometry().with_coordinates(&plus, true).unwrap();
+        let geo_m = m.geometry().with_coordinates(&minus, true).unwrap();
+        for el in &rule {
+            for q in &el.points {
+                let jv_p = geo_p
+                    .jacobian(q.u, q.v, 0, true)
+                    .unwrap()
+                    .apply(Deriv::Value, v);
+                let jv_m = geo_m
+                    .jacobian(q.u, q.v, 0, true)
+                    .unwrap()
+                    .apply(Deriv::Value, v);
+                let jdot_v: [f64; 3] = std::array::from_fn(|x| (jv_p[x] - jv_m[x]) / (2.0 * eps));
+                let j = geo.jacobian(q.u, q.v, 0, true).unwrap();
+                j.apply_transpose_add(Deriv::Value, jdot_v, -m.material().mu * q.weight, &mut rhs);
+            }
+        }
+        let mff = DenseMatrix::from_fn(free.len(), free.len(), |i, j| {
+            mats.mass.get(free[i], free[j])
+        });
+        let rhs_f: Vec<f64> = free.iter().map(|&d| rhs[d]).collect();
+        let a_f = cholesky_solve_dense(&mff, &rhs_f).unwrap();
+        let mut a = vec![0.0; n];
+        for (i, &d) in free.iter().enumerate() {
+            a[d] = a_f[i];
+        }
+        a
+    };
+    let (t_end, wv): (f64, f64) = (0.4, 0.5);
+    // RK4 reference.
+    let s0 = m.initial_state(&[[0.0, 0.0, -0.2]], wv);
+    let mut p = m.full_coordinates(&s0.q);
+    let mut v = m.full_velocity(&s0.v);
+    let h: f64 = 0.004;
+    for _ in 0..(t_end / h).round() as usize {
+        let axpy = |x: &[f64], a: f64, y: &[f64]| -> Vec<f64> {
+            x.iter().zip(y).map(|(x, y)| x + a * y).collect()
+        };
+        let k1v = acceleration(&p, &v);
+        let k1p = v.clone();
+        let (p2, v2) = (axpy(&p, 0.5 * h, &k1p), axpy(&v, 0.5 * h, &k1v));
+        let k2v = acceleration(&p2, &v2);
+        let (p3, v3) = (axpy(&p, 0.5 * h, &v2), axpy(&v, 0.5 * h, &k2v));
+        let k3v = acceleration(&p3, &v3);
+        let (p4, v4) = (axpy(&p, h, &v3), axpy(&v, h, &k3v));
+        let k4v = acceleration(&p4, &v4);
+        for i in 0..n {
+            p[i] += h / 6.0 * (k1p[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
+            v[i] += h / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i]);
+        }
+    }
+    let steps = |dt: f64| (t_end / dt).round() as usize;
+    let errors: Vec<f64> = [0.02, 0.01, 0.005]
+        .iter()
+        .map(|&dt| support::max_abs_diff(&run_rational(&m, dt, steps(dt), wv), &p))
+        .collect();
+    let r1 = support::rate(errors[0], errors[1]);
+    let r2 = support::rate(errors[1], errors[2]);
+    eprintln!("free weights vs RK4 reference: errors {errors:?}, rates {r1:.3}, {r2:.3}");
+    assert!(
+        (r2 - 1.0).abs() <= tol::RATE_SLACK,
+        "errors {errors:?}, rates {r1}, {r2}"
+    );
 }

@@ -68,11 +68,20 @@ where
 {
     let path = path.as_ref();
     if header.is_empty() {
-        return Err(OutputError::invalid(path, "a CSV file needs at least one column"));
+        return Err(OutputError::invalid(
+            path,
+            "a CSV file needs at least one column",
+        ));
     }
     // Render first: a bad row must not leave a partial file behind.
     let mut text = String::new();
-    text.push_str(&header.iter().map(|h| quote(h)).collect::<Vec<_>>().join(","));
+    text.push_str(
+        &header
+            .iter()
+            .map(|h| quote(h))
+            .collect::<Vec<_>>()
+            .join(","),
+    );
     text.push('\n');
     for (i, row) in rows.into_iter().enumerate() {
         if row.len() != header.len() {
@@ -128,7 +137,10 @@ mod tests {
         for (line, row) in lines.zip(&rows) {
             let back: Vec<f64> = line.split(',').map(|s| s.parse().unwrap()).collect();
             for (b, r) in back.iter().zip(row) {
-                assert!(b.to_bits() == r.to_bits() || (b.is_nan() && r.is_nan()), "{line}");
+                assert!(
+                    b.to_bits() == r.to_bits() || (b.is_nan() && r.is_nan()),
+                    "{line}"
+                );
             }
         }
     }

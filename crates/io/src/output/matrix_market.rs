@@ -193,13 +193,21 @@ fn parse_file(path: &Path) -> Result<Parsed, OutputError> {
         return Err(OutputError::parse(
             path,
             1,
-            format!("expected a `%%MatrixMarket matrix <layout> <field> <symmetry>` banner, got `{banner}`"),
+            format!(
+                "expected a `%%MatrixMarket matrix <layout> <field> <symmetry>` banner, got `{banner}`"
+            ),
         ));
     }
     let layout = match words[2].as_str() {
         "coordinate" => Layout::Coordinate,
         "array" => Layout::Array,
-        other => return Err(OutputError::parse(path, 1, format!("unknown layout `{other}`"))),
+        other => {
+            return Err(OutputError::parse(
+                path,
+                1,
+                format!("unknown layout `{other}`"),
+            ));
+        }
     };
     match words[3].as_str() {
         "real" | "integer" | "double" => {}
@@ -268,7 +276,11 @@ fn parse_file(path: &Path) -> Result<Parsed, OutputError> {
         Layout::Coordinate => {
             let nnz = size[2];
             if nnz > MAX_ENTRIES {
-                return Err(OutputError::parse(path, size_line, format!("{nnz} entries is too many")));
+                return Err(OutputError::parse(
+                    path,
+                    size_line,
+                    format!("{nnz} entries is too many"),
+                ));
             }
             let mut count = 0;
             for (line, l) in data {
@@ -297,7 +309,11 @@ fn parse_file(path: &Path) -> Result<Parsed, OutputError> {
                     return Err(OutputError::parse(
                         path,
                         line,
-                        format!("entry ({}, {}) lies above the diagonal of a symmetric file", i + 1, j + 1),
+                        format!(
+                            "entry ({}, {}) lies above the diagonal of a symmetric file",
+                            i + 1,
+                            j + 1
+                        ),
                     ));
                 }
                 parsed.triplets.push((i, j, v));
@@ -340,7 +356,10 @@ fn parse_file(path: &Path) -> Result<Parsed, OutputError> {
                 return Err(OutputError::parse(
                     path,
                     size_line,
-                    format!("a {nrows} x {ncols} array needs {stored} values, the file has {}", values.len()),
+                    format!(
+                        "a {nrows} x {ncols} array needs {stored} values, the file has {}",
+                        values.len()
+                    ),
                 ));
             }
             if symmetry == Symmetry::General {
@@ -350,11 +369,19 @@ fn parse_file(path: &Path) -> Result<Parsed, OutputError> {
                 let mut dense = vec![0.0; total];
                 let mut it = values.into_iter();
                 for j in 0..ncols {
-                    let start = if symmetry == Symmetry::Symmetric { j } else { j + 1 };
+                    let start = if symmetry == Symmetry::Symmetric {
+                        j
+                    } else {
+                        j + 1
+                    };
                     for i in start..nrows {
                         let v = it.next().unwrap_or(0.0);
                         dense[j * nrows + i] = v;
-                        dense[i * nrows + j] = if symmetry == Symmetry::Symmetric { v } else { -v };
+                        dense[i * nrows + j] = if symmetry == Symmetry::Symmetric {
+                            v
+                        } else {
+                            -v
+                        };
                     }
                 }
                 parsed.dense = dense;
@@ -394,7 +421,11 @@ pub fn read_matrix_market_array(
     let path = path.as_ref();
     let p = parse_file(path)?;
     if p.layout != Layout::Array {
-        return Err(OutputError::parse(path, 1, "expected an `array` file, found `coordinate`"));
+        return Err(OutputError::parse(
+            path,
+            1,
+            "expected an `array` file, found `coordinate`",
+        ));
     }
     Ok((p.nrows, p.ncols, p.dense))
 }
@@ -427,7 +458,11 @@ mod tests {
         let a = sample();
         write_matrix_market(&p, &a, "stiffness\nordering: [x0, y0, z0, x1, ...]").unwrap();
         let text = std::fs::read_to_string(&p).unwrap();
-        assert!(text.starts_with("%%MatrixMarket matrix coordinate real general\n% stiffness\n% ordering"));
+        assert!(
+            text.starts_with(
+                "%%MatrixMarket matrix coordinate real general\n% stiffness\n% ordering"
+            )
+        );
         assert_eq!(read_matrix_market(&p).unwrap(), a);
     }
 
@@ -474,11 +509,26 @@ mod tests {
         let p = dir.path().join("bad.mtx");
         let cases = [
             ("", "empty file"),
-            ("%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1\n", "complex"),
-            ("%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1.0\n", ":3:"),
-            ("%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n", "announces 2"),
-            ("%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 abc\n", "bad value `abc`"),
-            ("%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n", "needs 4 values"),
+            (
+                "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1\n",
+                "complex",
+            ),
+            (
+                "%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1.0\n",
+                ":3:",
+            ),
+            (
+                "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n",
+                "announces 2",
+            ),
+            (
+                "%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 abc\n",
+                "bad value `abc`",
+            ),
+            (
+                "%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n",
+                "needs 4 values",
+            ),
         ];
         for (text, needle) in cases {
             std::fs::write(&p, text).unwrap();

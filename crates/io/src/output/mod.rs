@@ -9,7 +9,7 @@ mod obj;
 pub use csv::{format_f64, write_csv, write_csv_text};
 pub use json::write_json;
 pub use matrix_market::{
-    read_matrix_market, read_matrix_market_array, write_matrix_market,
-    write_matrix_market_array, write_matrix_market_symmetric, write_matrix_market_vector,
+    read_matrix_market, read_matrix_market_array, write_matrix_market, write_matrix_market_array,
+    write_matrix_market_symmetric, write_matrix_market_vector,
 };
 pub use obj::{ObjMesh, read_obj, write_obj};

@@ -62,15 +62,22 @@ impl ObjMesh {
         let n = self.vertices.len();
         for (f, face) in self.faces.iter().enumerate() {
             if face.len() < 3 {
-                return Err(format!("face {f} has {} vertices, at least 3 needed", face.len()));
+                return Err(format!(
+                    "face {f} has {} vertices, at least 3 needed",
+                    face.len()
+                ));
             }
             if let Some(&k) = face.iter().find(|&&k| k >= n) {
-                return Err(format!("face {f} refers to vertex {k}, but there are {n} vertices"));
+                return Err(format!(
+                    "face {f} refers to vertex {k}, but there are {n} vertices"
+                ));
             }
         }
         for (l, line) in self.lines.iter().enumerate() {
             if let Some(&k) = line.iter().find(|&&k| k >= n) {
-                return Err(format!("line {l} refers to vertex {k}, but there are {n} vertices"));
+                return Err(format!(
+                    "line {l} refers to vertex {k}, but there are {n} vertices"
+                ));
             }
         }
         Ok(())
@@ -87,7 +94,13 @@ pub fn write_obj(path: impl AsRef<Path>, mesh: &ObjMesh, comment: &str) -> Resul
             writeln!(w, "# {line}")?;
         }
         for v in &mesh.vertices {
-            writeln!(w, "v {} {} {}", format_f64(v[0]), format_f64(v[1]), format_f64(v[2]))?;
+            writeln!(
+                w,
+                "v {} {} {}",
+                format_f64(v[0]),
+                format_f64(v[1]),
+                format_f64(v[2])
+            )?;
         }
         for face in &mesh.faces {
             write!(w, "f")?;
@@ -135,7 +148,11 @@ pub fn read_obj(path: impl AsRef<Path>) -> Result<ObjMesh, OutputError> {
         match tag {
             "v" => {
                 if rest.len() < 3 {
-                    return Err(OutputError::parse(path, line, format!("`v` needs 3 coordinates: `{raw}`")));
+                    return Err(OutputError::parse(
+                        path,
+                        line,
+                        format!("`v` needs 3 coordinates: `{raw}`"),
+                    ));
                 }
                 let mut p = [0.0; 3];
                 for (c, s) in p.iter_mut().zip(&rest) {
@@ -147,7 +164,11 @@ pub fn read_obj(path: impl AsRef<Path>) -> Result<ObjMesh, OutputError> {
             }
             "f" => {
                 if rest.len() < 3 {
-                    return Err(OutputError::parse(path, line, format!("`f` needs 3 or more vertices: `{raw}`")));
+                    return Err(OutputError::parse(
+                        path,
+                        line,
+                        format!("`f` needs 3 or more vertices: `{raw}`"),
+                    ));
                 }
                 let face = rest
                     .iter()
@@ -157,7 +178,11 @@ pub fn read_obj(path: impl AsRef<Path>) -> Result<ObjMesh, OutputError> {
             }
             "l" => {
                 if rest.len() < 2 {
-                    return Err(OutputError::parse(path, line, format!("`l` needs 2 or more vertices: `{raw}`")));
+                    return Err(OutputError::parse(
+                        path,
+                        line,
+                        format!("`l` needs 2 or more vertices: `{raw}`"),
+                    ));
                 }
                 let ids = rest
                     .iter()

@@ -1,0 +1,577 @@
+//! The sections of a scene file as Rust types. Every table is `deny_unknown_fields`, every
+//! section has a `Default` (the values documented in `crates/io/SCENE_KEYS.md`).
+
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::ser::Serializer;
+use serde::{Deserialize, Serialize};
+
+/// The geometry: exactly one of `[surface]` or `[curve]`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GeometrySpec {
+    /// A tensor-product NURBS surface (`[surface]`).
+    Surface(SurfaceSpec),
+    /// A NURBS curve (`[curve]`), the one-parameter case.
+    Curve(CurveSpec),
+}
+
+impl GeometrySpec {
+    /// Control points along u and along v (`n_v = 1` for a curve).
+    pub fn net_dims(&self) -> (usize, usize) {
+        match self {
+            GeometrySpec::Surface(s) => (s.n_u(), s.n_v()),
+            GeometrySpec::Curve(c) => (c.control_points.len(), 1),
+        }
+    }
+
+    /// Number of control points.
+    pub fn n_control_points(&self) -> usize {
+        let (a, b) = self.net_dims();
+        a * b
+    }
+
+    /// True for `[surface]`.
+    pub fn is_surface(&self) -> bool {
+        matches!(self, GeometrySpec::Surface(_))
+    }
+
+    /// The section name, `"surface"` or `"curve"`.
+    pub fn section(&self) -> &'static str {
+        match self {
+            GeometrySpec::Surface(_) => "surface",
+            GeometrySpec::Curve(_) => "curve",
+        }
+    }
+}
+
+/// `[surface]`: a NURBS surface (SPEC §1–2). Control point `(i, j)` is `control_points[i][j]`,
+/// `i` along u (rows), `j` along v; flat index `k = i · n_v + j`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SurfaceSpec {
+    /// Degree along u (≥ 1; the paper's order is degree + 1).
+    pub degree_u: usize,
+    /// Degree along v (≥ 1).
+    pub degree_v: usize,
+    /// Knot vector along u, non-decreasing, `n_u + degree_u + 1` values.
+    pub knots_u: Vec<f64>,
+    /// Knot vector along v, `n_v + degree_v + 1` values.
+    pub knots_v: Vec<f64>,
+    /// `n_u` rows of `n_v` points `[x, y, z]`.
+    pub control_points: Vec<Vec<[f64; 3]>>,
+    /// Weights with the shape of `control_points` (all 1 when absent); positive.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub weights: Option<Vec<Vec<f64>>>,
+}
+
+impl SurfaceSpec {
+    /// Control points along u (rows).
+    pub fn n_u(&self) -> usize {
+        self.control_points.len()
+    }
+
+    /// Control points along v (length of the first row).
+    pub fn n_v(&self) -> usize {
+        self.control_points.first().map_or(0, Vec::len)
+    }
+
+    /// Control points in flat order `k = i · n_v + j`.
+    pub fn flat_control_points(&self) -> Vec<[f64; 3]> {
+        self.control_points.iter().flatten().copied().collect()
+    }
+
+    /// Weights in flat order (1 where the scene gives none).
+    pub fn flat_weights(&self) -> Vec<f64> {
+        match &self.weights {
+            Some(w) => w.iter().flatten().copied().collect(),
+            None => vec![1.0; self.n_u() * self.n_v()],
+        }
+    }
+}
+
+/// `[curve]`: a NURBS curve.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CurveSpec {
+    /// Degree (≥ 1).
+    pub degree: usize,
+    /// Knot vector, `n + degree + 1` values.
+    pub knots: Vec<f64>,
+    /// `n` points `[x, y, z]`.
+    pub control_points: Vec<[f64; 3]>,
+    /// `n` positive weights (all 1 when absent).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub weights: Option<Vec<f64>>,
+}
+
+impl CurveSpec {
+    /// Weights (1 where the scene gives none).
+    pub fn flat_weights(&self) -> Vec<f64> {
+        self.weights
+            .clone()
+            .unwrap_or_else(|| vec![1.0; self.control_points.len()])
+    }
+}
+
+/// `[material]`: D-NURBS material (SPEC §3). All values ≥ 0, `mu` > 0. For a curve only
+/// `mu`, `gamma`, `alpha11` (stretching α) and `beta11` (bending β) apply.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Mass density μ per unit parameter area (> 0; default 1).
+    pub mu: f64,
+    /// Damping density γ (default 0).
+    pub gamma: f64,
+    /// Stretching α11 along u.
+    pub alpha11: f64,
+    /// Stretching α22 along v.
+    pub alpha22: f64,
+    /// Bending β11 (∂²/∂u²).
+    pub beta11: f64,
+    /// Twist β12 (∂²/∂u∂v).
+    pub beta12: f64,
+    /// Bending β22 (∂²/∂v²).
+    pub beta22: f64,
+}
+
+impl Default for MaterialSpec {
+    fn default() -> Self {
+        Self {
+            mu: 1.0,
+            gamma: 0.0,
+            alpha11: 0.0,
+            alpha22: 0.0,
+            beta11: 0.0,
+            beta12: 0.0,
+            beta22: 0.0,
+        }
+    }
+}
+
+/// `[loads]`: external forces (default: none).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LoadsSpec {
+    /// Gravitational acceleration g; the force density is μ g.
+    pub gravity: [f64; 3],
+    /// Constant force per unit parameter area (per unit parameter length for a curve).
+    pub distributed: [f64; 3],
+    /// Point loads (`[[loads.point]]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub point: Vec<PointLoadSpec>,
+}
+
+/// One `[[loads.point]]`: a force applied at a parameter point.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointLoadSpec {
+    /// Parameter u (inside the knot domain).
+    pub u: f64,
+    /// Parameter v (surfaces only; required there).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub v: Option<f64>,
+    /// The force vector.
+    pub force: [f64; 3],
+}
+
+/// `[constraints]`: fixed control points and general linear constraints (SPEC §4).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ConstraintsSpec {
+    /// Fix the `k` outer rings of control points (0 = none); for a curve, `k` points at each end.
+    pub fixed_rings: usize,
+    /// Further fixed control points, `[i, j]` (curves: `[i]`).
+    pub fixed: Vec<Vec<usize>>,
+    /// Hold the weights fixed when weights are unknowns (default true).
+    pub fixed_weights: bool,
+    /// General constraints `A p = b`, one row each (`[[constraints.linear]]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub linear: Vec<LinearConstraintSpec>,
+}
+
+impl Default for ConstraintsSpec {
+    fn default() -> Self {
+        Self {
+            fixed_rings: 0,
+            fixed: Vec::new(),
+            fixed_weights: true,
+            linear: Vec::new(),
+        }
+    }
+}
+
+/// One row `Σ coefficient · p[point].component = rhs` of a linear constraint.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearConstraintSpec {
+    /// The terms of the row (at least one).
+    pub terms: Vec<LinearTermSpec>,
+    /// Right-hand side b (default 0).
+    #[serde(default)]
+    pub rhs: f64,
+}
+
+/// One term of a linear constraint row.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearTermSpec {
+    /// Control point `[i, j]` (curves: `[i]`).
+    pub point: Vec<usize>,
+    /// Which coordinate.
+    pub component: Component,
+    /// Coefficient (default 1).
+    #[serde(default = "one")]
+    pub coefficient: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A generalized coordinate of a control point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Component {
+    /// x.
+    X,
+    /// y.
+    Y,
+    /// z.
+    Z,
+    /// The weight (only when `dnurbs.weights_as_dofs = true`).
+    W,
+}
+
+impl Component {
+    /// Offset within a control point's dofs: x 0, y 1, z 2, w 3.
+    pub fn offset(self) -> usize {
+        match self {
+            Component::X => 0,
+            Component::Y => 1,
+            Component::Z => 2,
+            Component::W => 3,
+        }
+    }
+}
+
+/// `[dnurbs]`: discretization options of the D-NURBS model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DnurbsSpec {
+    /// Weights as degrees of freedom (4 per control point) instead of constants.
+    pub weights_as_dofs: bool,
+    /// Gauss–Legendre points per direction and knot span, 1..=32 (default 4).
+    pub quadrature_points: usize,
+    /// Integrate over the parameter domain (default, the paper) or the surface area.
+    pub integrate_over: IntegrationDomain,
+    /// Rest shape of the elastic energy.
+    pub rest_shape: RestShape,
+}
+
+impl Default for DnurbsSpec {
+    fn default() -> Self {
+        Self {
+            weights_as_dofs: false,
+            quadrature_points: 4,
+            integrate_over: IntegrationDomain::Parameter,
+            rest_shape: RestShape::Initial,
+        }
+    }
+}
+
+/// Domain of the energy integrals (SPEC §3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum IntegrationDomain {
+    /// `du dv` over the parameter square (the paper's literal reading).
+    #[default]
+    Parameter,
+    /// `|c_u × c_v| du dv`, the surface area element.
+    Area,
+}
+
+/// Rest shape of the D-NURBS energy (SPEC §3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RestShape {
+    /// Displacement form, `p_rest = p(0)`: the initial surface is in equilibrium.
+    #[default]
+    Initial,
+    /// Terzopoulos–Qin's literal energy on p itself, `p_rest = 0`.
+    Zero,
+}
+
+/// `[initial]`: initial state.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InitialSpec {
+    /// Velocity of every free control point (fixed ones get zero).
+    pub velocity: [f64; 3],
+    /// Velocity of every free weight (weights as unknowns only).
+    pub weight_velocity: f64,
+    /// Per-control-point velocities in flat order `k = i · n_v + j`; in the file they have the
+    /// shape of `control_points`. Replaces `velocity` (which must then be left at zero).
+    pub velocities: Option<Vec<[f64; 3]>>,
+    /// Constant offset added to the free control points at t = 0.
+    pub displacement: [f64; 3],
+}
+
+/// `[simulation]`: time stepping and probes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SimulationSpec {
+    /// Time step Δt in seconds (> 0; default 0.08, the paper's).
+    pub dt: f64,
+    /// End time in seconds (> 0; default 4).
+    pub t_end: f64,
+    /// Integrator of the D-NURBS model.
+    pub dnurbs_integrator: DnurbsIntegrator,
+    /// Integrator of the mass-spring model.
+    pub msm_integrator: MsmIntegrator,
+    /// Write a ParaView frame every n steps (≥ 1).
+    pub save_every: usize,
+    /// Extra probe points `[u, v]` (curves: `[u]`); `(0.5, 0.5)` is always probed first.
+    pub probes: Vec<Vec<f64>>,
+}
+
+impl Default for SimulationSpec {
+    fn default() -> Self {
+        Self {
+            dt: 0.08,
+            t_end: 4.0,
+            dnurbs_integrator: DnurbsIntegrator::TerzopoulosQin,
+            msm_integrator: MsmIntegrator::SymplecticEuler,
+            save_every: 1,
+            probes: Vec::new(),
+        }
+    }
+}
+
+/// Integrators offered for the D-NURBS model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DnurbsIntegrator {
+    /// Terzopoulos–Qin backward differences (the paper's).
+    #[default]
+    TerzopoulosQin,
+    /// Newmark average acceleration.
+    Newmark,
+    /// Exact modal solution (undamped, constant weights).
+    Modal,
+}
+
+impl DnurbsIntegrator {
+    /// The corresponding `nurbspring_sim` integrator.
+    pub fn kind(self) -> nurbspring_sim::IntegratorKind {
+        use nurbspring_sim::IntegratorKind as K;
+        match self {
+            DnurbsIntegrator::TerzopoulosQin => K::TerzopoulosQin,
+            DnurbsIntegrator::Newmark => K::Newmark,
+            DnurbsIntegrator::Modal => K::Modal,
+        }
+    }
+}
+
+/// Integrators offered for the mass-spring model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MsmIntegrator {
+    /// Symplectic Euler (explicit).
+    #[default]
+    SymplecticEuler,
+    /// Velocity Verlet (explicit).
+    #[serde(alias = "velocity-verlet")]
+    Verlet,
+    /// Classical Runge–Kutta (explicit).
+    Rk4,
+    /// Backward Euler with Newton iterations (implicit).
+    BackwardEuler,
+    /// Newmark average acceleration with Newton iterations (implicit).
+    Newmark,
+}
+
+impl MsmIntegrator {
+    /// The corresponding `nurbspring_sim` integrator.
+    pub fn kind(self) -> nurbspring_sim::IntegratorKind {
+        use nurbspring_sim::IntegratorKind as K;
+        match self {
+            MsmIntegrator::SymplecticEuler => K::SymplecticEuler,
+            MsmIntegrator::Verlet => K::VelocityVerlet,
+            MsmIntegrator::Rk4 => K::Rk4,
+            MsmIntegrator::BackwardEuler => K::BackwardEuler,
+            MsmIntegrator::Newmark => K::Newmark,
+        }
+    }
+}
+
+/// `[msm]`: the mass-spring lattice (SPEC §5).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MsmSpec {
+    /// Where the nodes sit in parameter space.
+    pub grid: LatticeGrid,
+    /// Nodes along u for `grid = "uniform"` (≥ 2).
+    pub nodes_u: usize,
+    /// Nodes along v for `grid = "uniform"` (≥ 2; ignored for curves).
+    pub nodes_v: usize,
+    /// Springs between grid neighbours.
+    pub structural: bool,
+    /// Springs on both diagonals of each cell.
+    pub shear: bool,
+    /// Springs to the second neighbour along each grid line.
+    pub bending: bool,
+    /// Structural spring constant (≥ 0).
+    pub k_edge: f64,
+    /// Shear spring constant (≥ 0).
+    pub k_diag: f64,
+    /// Bending spring constant (≥ 0).
+    pub k_bend: f64,
+    /// Mass of every node (> 0).
+    pub mass: f64,
+    /// Damping coefficient per node (≥ 0).
+    pub damping: f64,
+    /// Rest length = (1 − pre_strain) × initial length; in (−1, 1).
+    pub pre_strain: f64,
+    /// Fixed nodes: `"auto"` (SPEC §5 rule) or a list `[[a, b], …]` (curves `[[a], …]`).
+    pub fixed: MsmFixed,
+}
+
+impl Default for MsmSpec {
+    fn default() -> Self {
+        Self {
+            grid: LatticeGrid::Knots,
+            nodes_u: 5,
+            nodes_v: 3,
+            structural: true,
+            shear: true,
+            bending: false,
+            k_edge: 1.0,
+            k_diag: 1.0,
+            k_bend: 1.0,
+            mass: 1.0,
+            damping: 0.0,
+            pre_strain: 0.0,
+            fixed: MsmFixed::Auto,
+        }
+    }
+}
+
+/// Parameter grid of the lattice nodes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LatticeGrid {
+    /// The distinct knot values in the domain (the paper's).
+    #[default]
+    Knots,
+    /// `nodes_u × nodes_v` uniformly spaced parameters.
+    Uniform,
+    /// The Greville abscissae (one node per control point).
+    Greville,
+}
+
+/// Which lattice nodes are fixed.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum MsmFixed {
+    /// A node is fixed when every control point with a non-zero basis value there is fixed.
+    #[default]
+    Auto,
+    /// Explicit node indices `[a, b]` (`a` along u), or `[a]` for curves.
+    Nodes(Vec<Vec<usize>>),
+}
+
+impl Serialize for MsmFixed {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            MsmFixed::Auto => s.serialize_str("auto"),
+            MsmFixed::Nodes(n) => n.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for MsmFixed {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = MsmFixed;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("\"auto\" or a list of node indices [[a, b], …]")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<MsmFixed, E> {
+                if v == "auto" {
+                    Ok(MsmFixed::Auto)
+                } else {
+                    Err(E::custom(format!(
+                        "unknown value `{v}`, expected \"auto\" or a list of node indices [[a, b], …]"
+                    )))
+                }
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<MsmFixed, A::Error> {
+                let mut nodes = Vec::new();
+                while let Some(n) = seq.next_element::<Vec<usize>>()? {
+                    nodes.push(n);
+                }
+                Ok(MsmFixed::Nodes(nodes))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `[fit]`: derivation of the spring constants and the mass (SPEC §6).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FitSpec {
+    /// Which dofs enter eq. (15).
+    pub dofs: FitDofs,
+    /// Constrain the spring constants to k ≥ 0.
+    pub nonnegative: bool,
+    /// Solver of the least-squares fit.
+    pub method: FitMethod,
+    /// How the node mass is chosen.
+    pub mass: MassMethod,
+    /// Candidate masses tried (0 = every distinct eigenvalue).
+    pub max_candidates: usize,
+}
+
+/// Rows and columns of eq. (15).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FitDofs {
+    /// Every dof (the paper's literal reading).
+    #[default]
+    All,
+    /// Free control-point dofs only.
+    Free,
+}
+
+/// Solver of the stiffness fit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FitMethod {
+    /// Normal equations of the linear least-squares problem.
+    #[default]
+    ClosedForm,
+    /// Trust-region iteration (the paper's method).
+    TrustRegion,
+}
+
+/// Choice of the node mass (Section III).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MassMethod {
+    /// Try the eigenvalues of M as candidate masses (the paper's).
+    #[default]
+    EigenvalueScan,
+    /// Use `msm.mass`.
+    Fixed,
+}
+
+/// `[output]`: what is written during runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Write a VTK frame every n saved frames (≥ 1).
+    pub vtk_every: usize,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { vtk_every: 1 }
+    }
+}

@@ -1,0 +1,976 @@
+//! Validation of a deserialized scene: every value is checked and every problem reported with
+//! its key path and value.
+
+use std::path::Path;
+
+use nurbspring_geom::{GeomError, KnotVector, NurbsCurve, NurbsSurface};
+
+use super::spec::*;
+use super::{MAX_ITEMS, Problem, RawCurve, RawInitial, RawScene, RawSurface, Scene, SceneError};
+use crate::output::format_f64;
+
+/// Largest number of time steps a scene may ask for.
+const MAX_STEPS: f64 = 1e9;
+
+/// Largest Gauss–Legendre rule.
+const MAX_QUADRATURE: usize = 32;
+
+/// Collected problems.
+#[derive(Default)]
+struct Problems(Vec<Problem>);
+
+fn fmt_list(v: &[f64]) -> String {
+    if v.len() <= 12 {
+        format!(
+            "[{}]",
+            v.iter()
+                .map(|&x| format_f64(x))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    } else {
+        let head: Vec<String> = v[..5].iter().map(|&x| format_f64(x)).collect();
+        let tail: Vec<String> = v[v.len() - 2..].iter().map(|&x| format_f64(x)).collect();
+        format!(
+            "[{}, …, {}] ({} values)",
+            head.join(", "),
+            tail.join(", "),
+            v.len()
+        )
+    }
+}
+
+impl Problems {
+    fn push(
+        &mut self,
+        key: impl Into<String>,
+        value: impl Into<String>,
+        message: impl Into<String>,
+    ) {
+        self.0.push(Problem::new(key, value, message));
+    }
+
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Finite number; returns whether it is.
+    fn finite(&mut self, key: &str, v: f64) -> bool {
+        if v.is_finite() {
+            true
+        } else {
+            self.push(key, format_f64(v), "must be a finite number");
+            false
+        }
+    }
+
+    fn nonnegative(&mut self, key: &str, v: f64, what: &str) {
+        if self.finite(key, v) && v < 0.0 {
+            self.push(key, format_f64(v), format!("{what} must not be negative"));
+        }
+    }
+
+    fn positive(&mut self, key: &str, v: f64, what: &str) {
+        if self.finite(key, v) && v <= 0.0 {
+            self.push(key, format_f64(v), format!("{what} must be positive"));
+        }
+    }
+
+    fn vec3(&mut self, key: &str, v: &[f64; 3]) {
+        for (c, x) in v.iter().enumerate() {
+            self.finite(&format!("{key}[{c}]"), *x);
+        }
+    }
+}
+
+/// What later checks need to know about the geometry.
+struct GeomInfo {
+    surface: bool,
+    n_u: usize,
+    n_v: usize,
+    domain_u: (f64, f64),
+    domain_v: (f64, f64),
+    /// Distinct knot values inside the domain (lattice on the knots).
+    distinct_u: usize,
+    distinct_v: usize,
+}
+
+/// Validates everything and builds the scene.
+pub(super) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneError> {
+    let mut p = Problems::default();
+    let (geometry, info) = match (raw.surface, raw.curve) {
+        (Some(_), Some(_)) => {
+            p.push(
+                "surface, curve",
+                "",
+                "give exactly one of [surface] or [curve], not both",
+            );
+            (None, None)
+        }
+        (None, None) => {
+            p.push(
+                "surface",
+                "",
+                "missing geometry: add a [surface] or a [curve] table",
+            );
+            (None, None)
+        }
+        (Some(s), None) => match surface_spec(s, &mut p) {
+            Some(spec) => {
+                let info = surface_info(&spec, &mut p);
+                (Some(GeometrySpec::Surface(spec)), info)
+            }
+            None => (None, None),
+        },
+        (None, Some(c)) => match curve_spec(c, &mut p) {
+            Some(spec) => {
+                let info = curve_info(&spec, &mut p);
+                (Some(GeometrySpec::Curve(spec)), info)
+            }
+            None => (None, None),
+        },
+    };
+    check_material(&raw.material, info.as_ref(), &mut p);
+    check_loads(&raw.loads, info.as_ref(), &mut p);
+    check_constraints(&raw.constraints, &raw.dnurbs, info.as_ref(), &mut p);
+    check_dnurbs(&raw.dnurbs, &mut p);
+    let initial = initial_spec(raw.initial, &raw.dnurbs, info.as_ref(), &mut p);
+    check_simulation(
+        &raw.simulation,
+        &raw.material,
+        &raw.dnurbs,
+        info.as_ref(),
+        &mut p,
+    );
+    check_msm(&raw.msm, info.as_ref(), &mut p);
+    if raw.output.vtk_every == 0 {
+        p.push("output.vtk_every", "0", "must be at least 1");
+    }
+    match (geometry, p.len()) {
+        (Some(geometry), 0) => Ok(Scene {
+            path: path.to_path_buf(),
+            geometry,
+            material: raw.material,
+            loads: raw.loads,
+            constraints: raw.constraints,
+            dnurbs: raw.dnurbs,
+            initial: initial.unwrap_or_default(),
+            simulation: raw.simulation,
+            msm: raw.msm,
+            fit: raw.fit,
+            output: raw.output,
+        }),
+        _ => Err(SceneError::Invalid {
+            path: path.to_path_buf(),
+            problems: p.0,
+        }),
+    }
+}
+
+/// Checks the number of knots against degree and control points; returns false on a problem.
+fn check_knot_count(
+    p: &mut Problems,
+    key: &str,
+    knots: &[f64],
+    degree: usize,
+    n: usize,
+    along: &str,
+) -> bool {
+    let needed = n.checked_add(degree).and_then(|x| x.checked_add(1));
+    if knots.is_empty() {
+        p.push(key, "[]", "the knot vector is empty");
+        return false;
+    }
+    if needed != Some(knots.len()) {
+        let needed = needed.map_or("more than can be stored".to_string(), |x| x.to_string());
+        p.push(
+            key,
+            fmt_list(knots),
+            format!(
+                "{} knots given, but {n} control points{along} with degree {degree} need {needed} \
+                 (control points + degree + 1)",
+                knots.len()
+            ),
+        );
+        return false;
+    }
+    true
+}
+
+/// `[surface]`: shapes, finiteness and weights; `None` when the points cannot be read.
+fn surface_spec(s: RawSurface, p: &mut Problems) -> Option<SurfaceSpec> {
+    let start = p.len();
+    for (key, d) in [
+        ("surface.degree_u", s.degree_u),
+        ("surface.degree_v", s.degree_v),
+    ] {
+        if d < 1 {
+            p.push(key, d.to_string(), "the degree must be at least 1");
+        }
+    }
+    for (key, k) in [
+        ("surface.knots_u", &s.knots_u),
+        ("surface.knots_v", &s.knots_v),
+    ] {
+        if k.len() > MAX_ITEMS {
+            p.push(
+                key,
+                format!("{} values", k.len()),
+                format!("more than {MAX_ITEMS} knots"),
+            );
+        }
+        for (i, &x) in k.iter().enumerate() {
+            p.finite(&format!("{key}[{i}]"), x);
+        }
+    }
+    let n_u = s.control_points.len();
+    let n_v = s.control_points.first().map_or(0, Vec::len);
+    if n_u == 0 {
+        p.push("surface.control_points", "[]", "no control points given");
+    } else if n_v == 0 {
+        p.push(
+            "surface.control_points[0]",
+            "[]",
+            "the first row of control points is empty",
+        );
+    }
+    if n_u.saturating_mul(n_v) > MAX_ITEMS {
+        p.push(
+            "surface.control_points",
+            format!("{n_u} x {n_v}"),
+            format!("more than {MAX_ITEMS} control points"),
+        );
+        return None;
+    }
+    let mut points = Vec::with_capacity(n_u);
+    for (i, row) in s.control_points.iter().enumerate() {
+        if row.len() != n_v {
+            p.push(
+                format!("surface.control_points[{i}]"),
+                format!("{} points", row.len()),
+                format!("every row must have {n_v} points, like row 0 (rows run along u, points in a row along v)"),
+            );
+            continue;
+        }
+        let mut out = Vec::with_capacity(n_v);
+        for (j, q) in row.iter().enumerate() {
+            let key = format!("surface.control_points[{i}][{j}]");
+            if q.len() != 3 {
+                p.push(
+                    &key,
+                    fmt_list(q),
+                    format!(
+                        "a control point needs 3 coordinates [x, y, z], got {}",
+                        q.len()
+                    ),
+                );
+                continue;
+            }
+            for (c, &x) in q.iter().enumerate() {
+                p.finite(&format!("{key}[{c}]"), x);
+            }
+            out.push([q[0], q[1], q[2]]);
+        }
+        points.push(out);
+    }
+    if let Some(w) = &s.weights {
+        if w.len() != n_u {
+            p.push(
+                "surface.weights",
+                format!("{} rows", w.len()),
+                format!("the weights must have the shape of control_points: {n_u} rows of {n_v}"),
+            );
+        }
+        for (i, row) in w.iter().enumerate() {
+            if row.len() != n_v {
+                p.push(
+                    format!("surface.weights[{i}]"),
+                    format!("{} values", row.len()),
+                    format!("every row of weights must have {n_v} values, like control_points"),
+                );
+            }
+            for (j, &x) in row.iter().enumerate() {
+                p.positive(&format!("surface.weights[{i}][{j}]"), x, "weights");
+            }
+        }
+    }
+    if p.len() == start {
+        let ok_u = check_knot_count(
+            p,
+            "surface.knots_u",
+            &s.knots_u,
+            s.degree_u,
+            n_u,
+            " along u",
+        );
+        let ok_v = check_knot_count(
+            p,
+            "surface.knots_v",
+            &s.knots_v,
+            s.degree_v,
+            n_v,
+            " along v",
+        );
+        if !(ok_u && ok_v) {
+            return None;
+        }
+    } else {
+        return None;
+    }
+    Some(SurfaceSpec {
+        degree_u: s.degree_u,
+        degree_v: s.degree_v,
+        knots_u: s.knots_u,
+        knots_v: s.knots_v,
+        control_points: points,
+        weights: s.weights,
+    })
+}
+
+/// `[curve]`: shapes, finiteness and weights.
+fn curve_spec(c: RawCurve, p: &mut Problems) -> Option<CurveSpec> {
+    let start = p.len();
+    if c.degree < 1 {
+        p.push(
+            "curve.degree",
+            c.degree.to_string(),
+            "the degree must be at least 1",
+        );
+    }
+    if c.knots.len() > MAX_ITEMS {
+        p.push(
+            "curve.knots",
+            format!("{} values", c.knots.len()),
+            format!("more than {MAX_ITEMS} knots"),
+        );
+    }
+    for (i, &x) in c.knots.iter().enumerate() {
+        p.finite(&format!("curve.knots[{i}]"), x);
+    }
+    let n = c.control_points.len();
+    if n == 0 {
+        p.push("curve.control_points", "[]", "no control points given");
+    }
+    if n > MAX_ITEMS {
+        p.push(
+            "curve.control_points",
+            format!("{n} points"),
+            format!("more than {MAX_ITEMS} control points"),
+        );
+        return None;
+    }
+    let mut points = Vec::with_capacity(n);
+    for (i, q) in c.control_points.iter().enumerate() {
+        let key = format!("curve.control_points[{i}]");
+        if q.len() != 3 {
+            p.push(
+                &key,
+                fmt_list(q),
+                format!(
+                    "a control point needs 3 coordinates [x, y, z], got {}",
+                    q.len()
+                ),
+            );
+            continue;
+        }
+        for (k, &x) in q.iter().enumerate() {
+            p.finite(&format!("{key}[{k}]"), x);
+        }
+        points.push([q[0], q[1], q[2]]);
+    }
+    if let Some(w) = &c.weights {
+        if w.len() != n {
+            p.push(
+                "curve.weights",
+                format!("{} values", w.len()),
+                format!("there must be one weight per control point ({n})"),
+            );
+        }
+        for (i, &x) in w.iter().enumerate() {
+            p.positive(&format!("curve.weights[{i}]"), x, "weights");
+        }
+    }
+    if p.len() != start || !check_knot_count(p, "curve.knots", &c.knots, c.degree, n, "") {
+        return None;
+    }
+    Some(CurveSpec {
+        degree: c.degree,
+        knots: c.knots,
+        control_points: points,
+        weights: c.weights,
+    })
+}
+
+/// Maps a knot-vector error to the key that caused it.
+fn knot_problem(
+    section: &str,
+    knots_key: &str,
+    degree_key: &str,
+    knots: &[f64],
+    e: GeomError,
+) -> Problem {
+    let k = format!("{section}.{knots_key}");
+    match e {
+        GeomError::DegreeTooLow { degree } => Problem::new(
+            format!("{section}.{degree_key}"),
+            degree.to_string(),
+            "the degree must be at least 1",
+        ),
+        GeomError::NonFiniteKnot { index, value } => {
+            Problem::new(format!("{k}[{index}]"), format_f64(value), e.to_string())
+        }
+        GeomError::DecreasingKnots { index, value, .. } => {
+            Problem::new(format!("{k}[{index}]"), format_f64(value), e.to_string())
+        }
+        other => Problem::new(k, fmt_list(knots), other.to_string()),
+    }
+}
+
+/// Maps a control-net error to the key that caused it (`n_v` = points per row, 1 for curves).
+fn net_problem(section: &str, n_v: Option<usize>, e: GeomError) -> Problem {
+    let at = |index: usize| match n_v {
+        Some(n_v) if n_v > 0 => format!("[{}][{}]", index / n_v, index % n_v),
+        _ => format!("[{index}]"),
+    };
+    match e {
+        GeomError::InvalidWeight { index, value } => Problem::new(
+            format!("{section}.weights{}", at(index)),
+            format_f64(value),
+            e.to_string(),
+        ),
+        GeomError::NonFiniteControlPoint { index, value } => Problem::new(
+            format!("{section}.control_points{}", at(index)),
+            format_f64(value),
+            e.to_string(),
+        ),
+        GeomError::WeightCount { found, .. } => Problem::new(
+            format!("{section}.weights"),
+            format!("{found} values"),
+            e.to_string(),
+        ),
+        GeomError::ControlPointCount { found, .. } => Problem::new(
+            format!("{section}.control_points"),
+            format!("{found} points"),
+            e.to_string(),
+        ),
+        other => Problem::new(section.to_string(), "", other.to_string()),
+    }
+}
+
+/// Builds the surface through `nurbspring-geom`, mapping its errors to key paths.
+pub(super) fn build_surface(s: &SurfaceSpec) -> Result<NurbsSurface, Problem> {
+    let ku = KnotVector::try_new(s.knots_u.clone(), s.degree_u)
+        .map_err(|e| knot_problem("surface", "knots_u", "degree_u", &s.knots_u, e))?;
+    let kv = KnotVector::try_new(s.knots_v.clone(), s.degree_v)
+        .map_err(|e| knot_problem("surface", "knots_v", "degree_v", &s.knots_v, e))?;
+    if let Some(w) = &s.weights
+        && let Some((i, row)) = w.iter().enumerate().find(|(_, r)| r.len() != s.n_v())
+    {
+        return Err(Problem::new(
+            format!("surface.weights[{i}]"),
+            format!("{} values", row.len()),
+            format!(
+                "every row of weights must have {} values, like control_points",
+                s.n_v()
+            ),
+        ));
+    }
+    if let Some((i, row)) = s
+        .control_points
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.len() != s.n_v())
+    {
+        return Err(Problem::new(
+            format!("surface.control_points[{i}]"),
+            format!("{} points", row.len()),
+            format!("every row must have {} points, like row 0", s.n_v()),
+        ));
+    }
+    NurbsSurface::try_new(ku, kv, s.flat_control_points(), s.flat_weights())
+        .map_err(|e| net_problem("surface", Some(s.n_v()), e))
+}
+
+/// Builds the curve through `nurbspring-geom`, mapping its errors to key paths.
+pub(super) fn build_curve(c: &CurveSpec) -> Result<NurbsCurve, Problem> {
+    let kv = KnotVector::try_new(c.knots.clone(), c.degree)
+        .map_err(|e| knot_problem("curve", "knots", "degree", &c.knots, e))?;
+    NurbsCurve::try_new(kv, c.control_points.clone(), c.flat_weights())
+        .map_err(|e| net_problem("curve", None, e))
+}
+
+/// Distinct knot values inside the domain.
+fn distinct_in_domain(k: &KnotVector) -> usize {
+    let (a, b) = k.domain();
+    k.distinct()
+        .into_iter()
+        .filter(|&x| x >= a && x <= b)
+        .count()
+}
+
+fn surface_info(s: &SurfaceSpec, p: &mut Problems) -> Option<GeomInfo> {
+    match build_surface(s) {
+        Ok(surface) => Some(GeomInfo {
+            surface: true,
+            n_u: s.n_u(),
+            n_v: s.n_v(),
+            domain_u: surface.basis_u().knots().domain(),
+            domain_v: surface.basis_v().knots().domain(),
+            distinct_u: distinct_in_domain(surface.basis_u().knots()),
+            distinct_v: distinct_in_domain(surface.basis_v().knots()),
+        }),
+        Err(problem) => {
+            p.0.push(problem);
+            None
+        }
+    }
+}
+
+fn curve_info(c: &CurveSpec, p: &mut Problems) -> Option<GeomInfo> {
+    match build_curve(c) {
+        Ok(curve) => Some(GeomInfo {
+            surface: false,
+            n_u: c.control_points.len(),
+            n_v: 1,
+            domain_u: curve.basis().knots().domain(),
+            domain_v: (0.0, 0.0),
+            distinct_u: distinct_in_domain(curve.basis().knots()),
+            distinct_v: 1,
+        }),
+        Err(problem) => {
+            p.0.push(problem);
+            None
+        }
+    }
+}
+
+fn check_material(m: &MaterialSpec, info: Option<&GeomInfo>, p: &mut Problems) {
+    p.positive("material.mu", m.mu, "the mass density");
+    for (key, v) in [
+        ("material.gamma", m.gamma),
+        ("material.alpha11", m.alpha11),
+        ("material.alpha22", m.alpha22),
+        ("material.beta11", m.beta11),
+        ("material.beta12", m.beta12),
+        ("material.beta22", m.beta22),
+    ] {
+        p.nonnegative(key, v, "material constants");
+    }
+    if info.is_some_and(|g| !g.surface) {
+        for (key, v) in [
+            ("material.alpha22", m.alpha22),
+            ("material.beta12", m.beta12),
+            ("material.beta22", m.beta22),
+        ] {
+            if v != 0.0 && v.is_finite() {
+                p.push(
+                    key,
+                    format_f64(v),
+                    "applies to surfaces only; a curve uses alpha11 and beta11",
+                );
+            }
+        }
+    }
+}
+
+/// Checks that parameter `x` lies in `domain`.
+fn check_param(p: &mut Problems, key: &str, x: f64, domain: (f64, f64)) {
+    if p.finite(key, x) && (x < domain.0 || x > domain.1) {
+        p.push(
+            key,
+            format_f64(x),
+            format!(
+                "outside the parameter domain [{}, {}]",
+                format_f64(domain.0),
+                format_f64(domain.1)
+            ),
+        );
+    }
+}
+
+fn check_loads(l: &LoadsSpec, info: Option<&GeomInfo>, p: &mut Problems) {
+    p.vec3("loads.gravity", &l.gravity);
+    p.vec3("loads.distributed", &l.distributed);
+    for (k, pl) in l.point.iter().enumerate() {
+        let key = format!("loads.point[{k}]");
+        p.vec3(&format!("{key}.force"), &pl.force);
+        let Some(g) = info else {
+            p.finite(&format!("{key}.u"), pl.u);
+            continue;
+        };
+        check_param(p, &format!("{key}.u"), pl.u, g.domain_u);
+        match (g.surface, pl.v) {
+            (true, Some(v)) => check_param(p, &format!("{key}.v"), v, g.domain_v),
+            (true, None) => p.push(
+                format!("{key}.v"),
+                "",
+                "missing: a point load on a surface needs u and v",
+            ),
+            (false, Some(v)) => p.push(
+                format!("{key}.v"),
+                format_f64(v),
+                "a point load on a curve has u only",
+            ),
+            (false, None) => {}
+        }
+    }
+}
+
+/// Checks a control-point index `[i, j]` (curves `[i]`).
+fn check_point_index(p: &mut Problems, key: &str, idx: &[usize], g: &GeomInfo) {
+    let value = format!("{idx:?}");
+    let arity = if g.surface { 2 } else { 1 };
+    if idx.len() != arity {
+        let want = if g.surface { "[i, j]" } else { "[i]" };
+        p.push(key, value, format!("a control point is given as {want}"));
+        return;
+    }
+    if idx[0] >= g.n_u || (g.surface && idx[1] >= g.n_v) {
+        let size = if g.surface {
+            format!("{} x {}", g.n_u, g.n_v)
+        } else {
+            g.n_u.to_string()
+        };
+        p.push(key, value, format!("outside the {size} control net"));
+    }
+}
+
+fn check_constraints(
+    c: &ConstraintsSpec,
+    d: &DnurbsSpec,
+    info: Option<&GeomInfo>,
+    p: &mut Problems,
+) {
+    for (r, row) in c.linear.iter().enumerate() {
+        let key = format!("constraints.linear[{r}]");
+        p.finite(&format!("{key}.rhs"), row.rhs);
+        if row.terms.is_empty() {
+            p.push(
+                format!("{key}.terms"),
+                "[]",
+                "a constraint needs at least one term",
+            );
+        } else if row.terms.iter().all(|t| t.coefficient == 0.0) {
+            p.push(format!("{key}.terms"), "", "every coefficient is zero");
+        }
+        for (t, term) in row.terms.iter().enumerate() {
+            let tk = format!("{key}.terms[{t}]");
+            p.finite(&format!("{tk}.coefficient"), term.coefficient);
+            if term.component == Component::W && !d.weights_as_dofs {
+                p.push(
+                    format!("{tk}.component"),
+                    "\"w\"",
+                    "weights are constants unless dnurbs.weights_as_dofs = true",
+                );
+            }
+            if let Some(g) = info {
+                check_point_index(p, &format!("{tk}.point"), &term.point, g);
+            }
+        }
+    }
+    let Some(g) = info else { return };
+    for (k, idx) in c.fixed.iter().enumerate() {
+        check_point_index(p, &format!("constraints.fixed[{k}]"), idx, g);
+    }
+    // Count the free control points.
+    let r = c.fixed_rings;
+    let in_ring = |i: usize, j: usize| {
+        i < r
+            || i.saturating_add(r) >= g.n_u
+            || (g.surface && (j < r || j.saturating_add(r) >= g.n_v))
+    };
+    let listed: std::collections::HashSet<(usize, usize)> = c
+        .fixed
+        .iter()
+        .map(|idx| {
+            (
+                idx.first().copied().unwrap_or(0),
+                idx.get(1).copied().unwrap_or(0),
+            )
+        })
+        .collect();
+    let any_free =
+        (0..g.n_u).any(|i| (0..g.n_v).any(|j| !in_ring(i, j) && !listed.contains(&(i, j))));
+    if !any_free {
+        p.push(
+            "constraints.fixed_rings",
+            r.to_string(),
+            format!(
+                "with constraints.fixed this fixes every control point of the {} x {} net: nothing can move",
+                g.n_u, g.n_v
+            ),
+        );
+    }
+}
+
+fn check_dnurbs(d: &DnurbsSpec, p: &mut Problems) {
+    if !(1..=MAX_QUADRATURE).contains(&d.quadrature_points) {
+        p.push(
+            "dnurbs.quadrature_points",
+            d.quadrature_points.to_string(),
+            format!("must be in 1..={MAX_QUADRATURE}"),
+        );
+    }
+}
+
+/// Reads a number of a TOML array.
+fn number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+/// Reads `[x, y, z]` at `key`.
+fn read_vec3(p: &mut Problems, key: &str, v: &toml::Value) -> Option<[f64; 3]> {
+    let arr = v.as_array().filter(|a| a.len() == 3);
+    let nums: Option<Vec<f64>> = arr.and_then(|a| a.iter().map(number).collect());
+    match nums {
+        Some(n) => {
+            let out = [n[0], n[1], n[2]];
+            p.vec3(key, &out);
+            Some(out)
+        }
+        None => {
+            p.push(
+                key,
+                v.to_string(),
+                "expected a velocity [vx, vy, vz] of 3 numbers",
+            );
+            None
+        }
+    }
+}
+
+fn initial_spec(
+    i: RawInitial,
+    d: &DnurbsSpec,
+    info: Option<&GeomInfo>,
+    p: &mut Problems,
+) -> Option<InitialSpec> {
+    p.vec3("initial.velocity", &i.velocity);
+    p.vec3("initial.displacement", &i.displacement);
+    if p.finite("initial.weight_velocity", i.weight_velocity)
+        && i.weight_velocity != 0.0
+        && !d.weights_as_dofs
+    {
+        p.push(
+            "initial.weight_velocity",
+            format_f64(i.weight_velocity),
+            "weights are constants unless dnurbs.weights_as_dofs = true",
+        );
+    }
+    let velocities = match (&i.velocities, info) {
+        (None, _) => None,
+        (Some(_), None) => return None,
+        (Some(v), Some(g)) => {
+            if i.velocity != [0.0; 3] {
+                p.push(
+                    "initial.velocity",
+                    format!("{:?}", i.velocity),
+                    "give either initial.velocity or initial.velocities, not both",
+                );
+            }
+            let start = p.len();
+            let mut out = Vec::new();
+            let key = "initial.velocities";
+            let shape = if g.surface {
+                format!(
+                    "{} rows of {} [vx, vy, vz], like control_points",
+                    g.n_u, g.n_v
+                )
+            } else {
+                format!("{} entries [vx, vy, vz], like control_points", g.n_u)
+            };
+            match v.as_array() {
+                Some(rows) if rows.len() == g.n_u => {
+                    for (r, row) in rows.iter().enumerate() {
+                        if g.surface {
+                            match row.as_array() {
+                                Some(cols) if cols.len() == g.n_v => {
+                                    for (c, x) in cols.iter().enumerate() {
+                                        if let Some(x) =
+                                            read_vec3(p, &format!("{key}[{r}][{c}]"), x)
+                                        {
+                                            out.push(x);
+                                        }
+                                    }
+                                }
+                                _ => p.push(
+                                    format!("{key}[{r}]"),
+                                    row.to_string(),
+                                    format!("expected {} velocities [vx, vy, vz]", g.n_v),
+                                ),
+                            }
+                        } else if let Some(x) = read_vec3(p, &format!("{key}[{r}]"), row) {
+                            out.push(x);
+                        }
+                    }
+                }
+                Some(rows) => p.push(
+                    key,
+                    format!("{} rows", rows.len()),
+                    format!("expected {shape}"),
+                ),
+                None => p.push(key, v.to_string(), format!("expected {shape}")),
+            }
+            if p.len() != start {
+                return None;
+            }
+            Some(out)
+        }
+    };
+    Some(InitialSpec {
+        velocity: i.velocity,
+        weight_velocity: i.weight_velocity,
+        velocities,
+        displacement: i.displacement,
+    })
+}
+
+fn check_simulation(
+    s: &SimulationSpec,
+    m: &MaterialSpec,
+    d: &DnurbsSpec,
+    info: Option<&GeomInfo>,
+    p: &mut Problems,
+) {
+    p.positive("simulation.dt", s.dt, "the time step");
+    p.positive("simulation.t_end", s.t_end, "the end time");
+    if s.dt > 0.0 && s.t_end > 0.0 && s.dt.is_finite() && s.t_end.is_finite() {
+        let steps = (s.t_end / s.dt).ceil();
+        if steps > MAX_STEPS {
+            p.push(
+                "simulation.t_end",
+                format_f64(s.t_end),
+                format!(
+                    "t_end / dt = {} steps of dt = {}; at most {} are allowed",
+                    format_f64(steps),
+                    format_f64(s.dt),
+                    format_f64(MAX_STEPS)
+                ),
+            );
+        }
+    }
+    if s.save_every == 0 {
+        p.push("simulation.save_every", "0", "must be at least 1");
+    }
+    if s.dnurbs_integrator == DnurbsIntegrator::Modal {
+        if m.gamma != 0.0 {
+            p.push(
+                "simulation.dnurbs_integrator",
+                "\"modal\"",
+                format!(
+                    "the modal solution needs an undamped model, but material.gamma = {}",
+                    format_f64(m.gamma)
+                ),
+            );
+        }
+        if d.weights_as_dofs {
+            p.push(
+                "simulation.dnurbs_integrator",
+                "\"modal\"",
+                "the modal solution needs constant weights (dnurbs.weights_as_dofs = false)",
+            );
+        }
+    }
+    if s.probes.len() > MAX_ITEMS {
+        p.push(
+            "simulation.probes",
+            format!("{} probes", s.probes.len()),
+            format!("more than {MAX_ITEMS}"),
+        );
+        return;
+    }
+    let Some(g) = info else { return };
+    for (k, probe) in s.probes.iter().enumerate() {
+        let key = format!("simulation.probes[{k}]");
+        let arity = if g.surface { 2 } else { 1 };
+        if probe.len() != arity {
+            let want = if g.surface { "[u, v]" } else { "[u]" };
+            p.push(&key, fmt_list(probe), format!("a probe is given as {want}"));
+            continue;
+        }
+        check_param(p, &format!("{key}[0]"), probe[0], g.domain_u);
+        if g.surface {
+            check_param(p, &format!("{key}[1]"), probe[1], g.domain_v);
+        }
+    }
+}
+
+fn check_msm(m: &MsmSpec, info: Option<&GeomInfo>, p: &mut Problems) {
+    for (key, v) in [
+        ("msm.k_edge", m.k_edge),
+        ("msm.k_diag", m.k_diag),
+        ("msm.k_bend", m.k_bend),
+    ] {
+        p.nonnegative(key, v, "spring constants");
+    }
+    p.positive("msm.mass", m.mass, "the node mass");
+    p.nonnegative("msm.damping", m.damping, "the damping coefficient");
+    if p.finite("msm.pre_strain", m.pre_strain) && !(m.pre_strain > -1.0 && m.pre_strain < 1.0) {
+        p.push(
+            "msm.pre_strain",
+            format_f64(m.pre_strain),
+            "must lie in (-1, 1)",
+        );
+    }
+    if !m.structural && !m.shear && !m.bending {
+        p.push(
+            "msm.structural",
+            "false",
+            "structural, shear and bending are all false: the lattice has no springs",
+        );
+    }
+    let surface = info.is_none_or(|g| g.surface);
+    if m.grid == LatticeGrid::Uniform {
+        if m.nodes_u < 2 {
+            p.push(
+                "msm.nodes_u",
+                m.nodes_u.to_string(),
+                "a uniform lattice needs at least 2 nodes along u",
+            );
+        }
+        if surface && m.nodes_v < 2 {
+            p.push(
+                "msm.nodes_v",
+                m.nodes_v.to_string(),
+                "a uniform lattice needs at least 2 nodes along v",
+            );
+        }
+    }
+    let Some(g) = info else { return };
+    let (lu, lv) = match m.grid {
+        LatticeGrid::Knots => (g.distinct_u, if g.surface { g.distinct_v } else { 1 }),
+        LatticeGrid::Greville => (g.n_u, g.n_v),
+        LatticeGrid::Uniform => (m.nodes_u, if g.surface { m.nodes_v } else { 1 }),
+    };
+    match lu.checked_mul(lv) {
+        Some(n) if n <= MAX_ITEMS => {}
+        _ => {
+            p.push(
+                if m.grid == LatticeGrid::Uniform {
+                    "msm.nodes_u"
+                } else {
+                    "msm.grid"
+                },
+                format!("{lu} x {lv} nodes"),
+                format!("the lattice would have more than {MAX_ITEMS} nodes"),
+            );
+            return;
+        }
+    }
+    if let MsmFixed::Nodes(nodes) = &m.fixed {
+        for (k, idx) in nodes.iter().enumerate() {
+            let key = format!("msm.fixed[{k}]");
+            let value = format!("{idx:?}");
+            if idx.len() != if g.surface { 2 } else { 1 } {
+                let want = if g.surface { "[a, b]" } else { "[a]" };
+                p.push(key, value, format!("a lattice node is given as {want}"));
+            } else if idx[0] >= lu || (g.surface && idx[1] >= lv) {
+                p.push(key, value, format!("outside the {lu} x {lv} lattice"));
+            }
+        }
+    }
+}
