@@ -5,14 +5,19 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::anyhow;
-use nurbspring_derive::{DeriveError, ExperimentConfig, FitMethod, FitOptions, FitResult, MassChoice, omega_matrix};
+use nurbspring_derive::{
+    DeriveError, ExperimentConfig, FitMethod, FitOptions, FitResult, MassChoice, omega_matrix,
+};
 use nurbspring_dnurbs::{
-    Constraints, DnurbsError, DnurbsModel, DnurbsOptions, Geometry, Integration, LinearConstraint, Loads, Material,
-    PointLoad, RationalStepper, RestShape,
+    Constraints, DnurbsError, DnurbsModel, DnurbsOptions, Geometry, Integration, LinearConstraint,
+    Loads, Material, PointLoad, RationalStepper, RestShape,
 };
 use nurbspring_io::scene::{self, GeometrySpec, Scene};
 use nurbspring_linalg::SparseMatrix;
-use nurbspring_msm::{FixedNodes, LatticeFile, LatticeOptions, MsmError, MsmModel, ParameterGrid, SpringKind, SpringLattice};
+use nurbspring_msm::{
+    FixedNodes, LatticeFile, LatticeOptions, MsmError, MsmModel, ParameterGrid, SpringKind,
+    SpringLattice,
+};
 use nurbspring_sim::{IntegratorKind, SimError, State};
 use serde::Deserialize;
 
@@ -84,11 +89,14 @@ pub fn dnurbs_options(scene: &Scene) -> DnurbsOptions {
 /// Flat control point index of `[i, j]` (surfaces) or `[i]` (curves).
 fn point_index(scene: &Scene, key: &str, p: &[usize]) -> Result<usize, Failure> {
     let (n_u, n_v) = scene.geometry.net_dims();
-    let bad = |why: String| Failure::input(anyhow!("{}: {key} = {p:?}: {why}", scene.path.display()));
+    let bad =
+        |why: String| Failure::input(anyhow!("{}: {key} = {p:?}: {why}", scene.path.display()));
     match (p, scene.geometry.is_surface()) {
         ([i, j], true) if *i < n_u && *j < n_v => Ok(i * n_v + j),
         ([i], false) if *i < n_u * n_v.max(1) => Ok(*i),
-        ([_, _], true) | ([_], false) => Err(bad(format!("no such control point in a {n_u} × {n_v} net"))),
+        ([_, _], true) | ([_], false) => {
+            Err(bad(format!("no such control point in a {n_u} × {n_v} net")))
+        }
         _ => Err(bad(if scene.geometry.is_surface() {
             "expected [i, j]".to_string()
         } else {
@@ -122,7 +130,10 @@ pub fn constraints(scene: &Scene) -> Result<Constraints, Failure> {
             }
             terms.push((k * dpp + offset, term.coefficient));
         }
-        linear.push(LinearConstraint { terms, rhs: row.rhs });
+        linear.push(LinearConstraint {
+            terms,
+            rhs: row.rhs,
+        });
     }
     Ok(Constraints {
         fixed_points,
@@ -135,8 +146,15 @@ pub fn constraints(scene: &Scene) -> Result<Constraints, Failure> {
 /// Which D-NURBS errors are bad input (exit 2) and which are failures of the run (exit 1).
 pub fn dnurbs_failure(e: DnurbsError) -> Failure {
     match e {
-        DnurbsError::Singular { .. } | DnurbsError::Linalg(_) | DnurbsError::NonFinite { .. } => Failure::run(e),
-        DnurbsError::Sim(ref s) if !matches!(s, SimError::InvalidTimeStep { .. } | SimError::InvalidDuration { .. }) => {
+        DnurbsError::Singular { .. } | DnurbsError::Linalg(_) | DnurbsError::NonFinite { .. } => {
+            Failure::run(e)
+        }
+        DnurbsError::Sim(ref s)
+            if !matches!(
+                s,
+                SimError::InvalidTimeStep { .. } | SimError::InvalidDuration { .. }
+            ) =>
+        {
             Failure::run(e)
         }
         _ => Failure::input(e),
@@ -210,7 +228,10 @@ pub fn simulation(scene: &Scene) -> Result<Simulation, Failure> {
 pub fn probes(scene: &Scene) -> Vec<(f64, f64)> {
     let mut out = vec![(0.5, 0.5)];
     for p in &scene.simulation.probes {
-        let q = (p.first().copied().unwrap_or(0.5), p.get(1).copied().unwrap_or(0.0));
+        let q = (
+            p.first().copied().unwrap_or(0.5),
+            p.get(1).copied().unwrap_or(0.0),
+        );
         if !out.contains(&q) {
             out.push(q);
         }
@@ -222,16 +243,21 @@ pub fn probes(scene: &Scene) -> Vec<(f64, f64)> {
 pub fn probe_matrix(scene: &Scene, model: &DnurbsModel) -> Result<SparseMatrix, Failure> {
     let weights = model.matrices().dofs_per_point == 4;
     match model.geometry() {
-        Geometry::Surface(s) => {
-            omega_matrix(s, &probes(scene), weights).map_err(|e| Failure::input(anyhow!("simulation.probes: {e}")))
-        }
+        Geometry::Surface(s) => omega_matrix(s, &probes(scene), weights)
+            .map_err(|e| Failure::input(anyhow!("simulation.probes: {e}"))),
         Geometry::Curve(c) => {
             let d = model.matrices().dofs_per_point;
             let mut triplets = Vec::new();
             let ps = probes(scene);
             for (n, &(u, _)) in ps.iter().enumerate() {
-                let u = if n == 0 { 0.5 * (c.domain().0 + c.domain().1) } else { u };
-                let j = c.jacobian(u, 0, weights).map_err(|e| Failure::input(anyhow!("simulation.probes: {e}")))?;
+                let u = if n == 0 {
+                    0.5 * (c.domain().0 + c.domain().1)
+                } else {
+                    u
+                };
+                let j = c
+                    .jacobian(u, 0, weights)
+                    .map_err(|e| Failure::input(anyhow!("simulation.probes: {e}")))?;
                 for l in 0..j.n_local() {
                     for comp in 0..d {
                         let col = j.column(l, comp, nurbspring_geom::Deriv::Value);
@@ -243,7 +269,8 @@ pub fn probe_matrix(scene: &Scene, model: &DnurbsModel) -> Result<SparseMatrix, 
                     }
                 }
             }
-            SparseMatrix::from_triplets(3 * ps.len(), d * c.n_control_points(), &triplets).map_err(Failure::run)
+            SparseMatrix::from_triplets(3 * ps.len(), d * c.n_control_points(), &triplets)
+                .map_err(Failure::run)
         }
     }
 }
@@ -289,7 +316,10 @@ pub fn run_rational(
 ) -> Result<(), Failure> {
     let energy = |p: &[f64], v: &[f64]| {
         let vf = model.full_velocity(v);
-        (0.5 * model.matrices().mass.quadratic_form(&vf), model.elastic_energy(p))
+        (
+            0.5 * model.matrices().mass.quadratic_form(&vf),
+            model.elastic_energy(p),
+        )
     };
     let p0 = model.full_coordinates(&initial.q);
     let (k0, e0) = energy(&p0, &initial.v);
@@ -310,7 +340,11 @@ pub fn run_rational(
 }
 
 /// `[msm]` lattice options (k and mass possibly overridden).
-fn lattice_options(scene: &Scene, overrides: &MsmOverrides, surface: &nurbspring_geom::NurbsSurface) -> Result<LatticeOptions, Failure> {
+fn lattice_options(
+    scene: &Scene,
+    overrides: &MsmOverrides,
+    surface: &nurbspring_geom::NurbsSurface,
+) -> Result<LatticeOptions, Failure> {
     let m = &scene.msm;
     let grid = match m.grid {
         scene::LatticeGrid::Knots => ParameterGrid::Knots,
@@ -350,10 +384,12 @@ fn lattice_options(scene: &Scene, overrides: &MsmOverrides, surface: &nurbspring
     };
     let check = |name: &str, v: Option<f64>, positive: bool| -> Result<(), Failure> {
         match v {
-            Some(x) if !x.is_finite() || x < 0.0 || (positive && x == 0.0) => Err(Failure::input(anyhow!(
-                "--{name} {x}: must be {} and finite",
-                if positive { "positive" } else { "non-negative" }
-            ))),
+            Some(x) if !x.is_finite() || x < 0.0 || (positive && x == 0.0) => {
+                Err(Failure::input(anyhow!(
+                    "--{name} {x}: must be {} and finite",
+                    if positive { "positive" } else { "non-negative" }
+                )))
+            }
             _ => Ok(()),
         }
     };
@@ -415,8 +451,14 @@ struct SimulationIn {
 
 /// The MSM of a scene (lattice from the surface, node velocities `Ω ṗ(0)`, eq. 18), or of an
 /// msm.json file; with its initial state and run settings.
-pub fn msm_model(path: &Path, overrides: &MsmOverrides) -> Result<(MsmModel, State, MsmRun), Failure> {
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
+pub fn msm_model(
+    path: &Path,
+    overrides: &MsmOverrides,
+) -> Result<(MsmModel, State, MsmRun), Failure> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+    {
         return msm_from_json(path, overrides);
     }
     let scene = load_scene(path)?;
@@ -428,15 +470,20 @@ pub fn msm_model(path: &Path, overrides: &MsmOverrides) -> Result<(MsmModel, Sta
         )));
     };
     let options = lattice_options(&scene, overrides, surface)?;
-    let lattice = SpringLattice::from_surface(surface, &options, model.fixed_points()).map_err(msm_failure)?;
+    let lattice = SpringLattice::from_surface(surface, &options, model.fixed_points())
+        .map_err(msm_failure)?;
     let params = lattice.params.clone().unwrap_or_default();
-    let omega = omega_matrix(surface, &params, model.matrices().dofs_per_point == 4).map_err(derive_failure)?;
+    let omega = omega_matrix(surface, &params, model.matrices().dofs_per_point == 4)
+        .map_err(derive_failure)?;
     let initial = dnurbs_initial_state(&scene, &model)?;
     let pdot = model.full_velocity(&initial.v);
     let mut xdot = vec![0.0; omega.nrows()];
     omega.mul_vec(&pdot, &mut xdot);
     let velocities: Vec<[f64; 3]> = xdot.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let probe_nodes = probes(&scene).iter().map(|&(u, v)| lattice.node_nearest(u, v)).collect();
+    let probe_nodes = probes(&scene)
+        .iter()
+        .map(|&(u, v)| lattice.node_nearest(u, v))
+        .collect();
     let sim = simulation(&scene)?;
     let msm = MsmModel::new(lattice).map_err(msm_failure)?;
     let state = msm.initial_state(&velocities);
@@ -453,9 +500,16 @@ pub fn msm_model(path: &Path, overrides: &MsmOverrides) -> Result<(MsmModel, Sta
     ))
 }
 
-fn msm_from_json(path: &Path, overrides: &MsmOverrides) -> Result<(MsmModel, State, MsmRun), Failure> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Failure::input(anyhow!("{}: cannot read the lattice file: {e}", path.display())))?;
+fn msm_from_json(
+    path: &Path,
+    overrides: &MsmOverrides,
+) -> Result<(MsmModel, State, MsmRun), Failure> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        Failure::input(anyhow!(
+            "{}: cannot read the lattice file: {e}",
+            path.display()
+        ))
+    })?;
     let file: MsmFileIn = serde_json::from_str(&text).map_err(|e| {
         Failure::input(anyhow!(
             "{}: not a valid lattice file at line {}, column {}: {e}",
@@ -464,7 +518,8 @@ fn msm_from_json(path: &Path, overrides: &MsmOverrides) -> Result<(MsmModel, Sta
             e.column()
         ))
     })?;
-    let mut lattice = SpringLattice::from_json(&file.lattice).map_err(|e| msm_failure(e).context(path))?;
+    let mut lattice =
+        SpringLattice::from_json(&file.lattice).map_err(|e| msm_failure(e).context(path))?;
     for (kind, k) in [
         (SpringKind::Structural, overrides.k_edge),
         (SpringKind::Shear, overrides.k_diag),
@@ -472,14 +527,19 @@ fn msm_from_json(path: &Path, overrides: &MsmOverrides) -> Result<(MsmModel, Sta
     ] {
         if let Some(k) = k {
             if !(k.is_finite() && k >= 0.0) {
-                return Err(Failure::input(anyhow!("--k-{} {k}: must be non-negative and finite", kind.name())));
+                return Err(Failure::input(anyhow!(
+                    "--k-{} {k}: must be non-negative and finite",
+                    kind.name()
+                )));
             }
             lattice.set_stiffness(kind, k);
         }
     }
     if let Some(m) = overrides.mass {
         if !(m.is_finite() && m > 0.0) {
-            return Err(Failure::input(anyhow!("--mass {m}: must be positive and finite")));
+            return Err(Failure::input(anyhow!(
+                "--mass {m}: must be positive and finite"
+            )));
         }
         lattice.set_mass(m);
     }
@@ -488,7 +548,11 @@ fn msm_from_json(path: &Path, overrides: &MsmOverrides) -> Result<(MsmModel, Sta
             s.dt,
             s.t_end,
             IntegratorKind::parse(&s.integrator).ok_or_else(|| {
-                Failure::input(anyhow!("{}: simulation.integrator = {:?}: unknown integrator", path.display(), s.integrator))
+                Failure::input(anyhow!(
+                    "{}: simulation.integrator = {:?}: unknown integrator",
+                    path.display(),
+                    s.integrator
+                ))
             })?,
         ),
         None => (0.01, 1.0, IntegratorKind::BackwardEuler),

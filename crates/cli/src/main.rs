@@ -105,7 +105,10 @@ fn main() -> ExitCode {
             eprintln!("error: --threads must be at least 1, got 0");
             return ExitCode::from(2);
         }
-        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n).build_global() {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+        {
             eprintln!("error: cannot start {n} worker threads: {e}");
             return ExitCode::from(1);
         }
@@ -169,7 +172,10 @@ pub fn prepare_out_dir(dir: &std::path::Path) -> Result<PathBuf, Failure> {
         )));
     }
     std::fs::create_dir_all(dir).map_err(|e| {
-        Failure::run(anyhow::anyhow!("cannot create the output folder {}: {e}", dir.display()))
+        Failure::run(anyhow::anyhow!(
+            "cannot create the output folder {}: {e}",
+            dir.display()
+        ))
     })?;
     Ok(dir.to_path_buf())
 }

@@ -45,7 +45,11 @@ pub fn write_pvd(path: &Path, frames: &[(f64, String)]) -> Result<(), OutputErro
 pub fn lattice_grid(lattice: &SpringLattice, x: &[f64]) -> VtkUnstructured {
     let points: Vec<[f64; 3]> = x.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
     let mut grid = VtkUnstructured::new(points.clone());
-    grid.cells = lattice.springs.iter().map(|s| Cell::Line([s.a, s.b])).collect();
+    grid.cells = lattice
+        .springs
+        .iter()
+        .map(|s| Cell::Line([s.a, s.b]))
+        .collect();
     let lengths = lattice.spring_lengths(x);
     grid.cell_data.push(DataArray::scalars(
         "stiffness",
@@ -69,20 +73,31 @@ pub fn lattice_grid(lattice: &SpringLattice, x: &[f64]) -> VtkUnstructured {
         lattice
             .springs
             .iter()
-            .map(|s| nurbspring_msm::SpringKind::ALL.iter().position(|k| *k == s.kind).unwrap_or(0) as f64)
+            .map(|s| {
+                nurbspring_msm::SpringKind::ALL
+                    .iter()
+                    .position(|k| *k == s.kind)
+                    .unwrap_or(0) as f64
+            })
             .collect(),
     ));
-    grid.point_data.push(DataArray::scalars("mass", lattice.masses.clone()));
+    grid.point_data
+        .push(DataArray::scalars("mass", lattice.masses.clone()));
     grid.point_data.push(DataArray::scalars(
         "fixed",
-        lattice.fixed.iter().map(|&f| if f { 1.0 } else { 0.0 }).collect(),
+        lattice
+            .fixed
+            .iter()
+            .map(|&f| if f { 1.0 } else { 0.0 })
+            .collect(),
     ));
     let displacement: Vec<[f64; 3]> = points
         .iter()
         .zip(&lattice.positions)
         .map(|(p, q)| [p[0] - q[0], p[1] - q[1], p[2] - q[2]])
         .collect();
-    grid.point_data.push(DataArray::vectors("displacement", &displacement));
+    grid.point_data
+        .push(DataArray::vectors("displacement", &displacement));
     grid
 }
 
@@ -103,9 +118,17 @@ const SAMPLES_PER_SPAN: usize = 8;
 fn geometry_at(geometry: &Geometry, p: &[f64], dofs_per_point: usize) -> Result<Geometry, Failure> {
     let n = geometry.n_control_points();
     let pts: Vec<[f64; 3]> = (0..n)
-        .map(|k| [p[dofs_per_point * k], p[dofs_per_point * k + 1], p[dofs_per_point * k + 2]])
+        .map(|k| {
+            [
+                p[dofs_per_point * k],
+                p[dofs_per_point * k + 1],
+                p[dofs_per_point * k + 2],
+            ]
+        })
         .collect();
-    let fail = |e: nurbspring_geom::GeomError| Failure::run(anyhow!("the deformed geometry is invalid: {e}"));
+    let fail = |e: nurbspring_geom::GeomError| {
+        Failure::run(anyhow!("the deformed geometry is invalid: {e}"))
+    };
     Ok(match geometry {
         Geometry::Surface(s) => {
             if dofs_per_point == 4 {
@@ -121,7 +144,12 @@ fn geometry_at(geometry: &Geometry, p: &[f64], dofs_per_point: usize) -> Result<
 
 /// A ParaView frame of the geometry at coordinates `p`: `.vts` structured grid for a surface,
 /// `.vtu` polyline for a curve.
-pub fn write_geometry_frame(path: &Path, geometry: &Geometry, p: &[f64], dofs_per_point: usize) -> Result<(), Failure> {
+pub fn write_geometry_frame(
+    path: &Path,
+    geometry: &Geometry,
+    p: &[f64],
+    dofs_per_point: usize,
+) -> Result<(), Failure> {
     let g = geometry_at(geometry, p, dofs_per_point)?;
     match &g {
         Geometry::Surface(s) => {
@@ -130,7 +158,8 @@ pub fn write_geometry_frame(path: &Path, geometry: &Geometry, p: &[f64], dofs_pe
             let (_, _, pts) = s.uniform_grid(nu, nv).map_err(Failure::run)?;
             let mut grid = VtkStructured::new(nu, nv, pts);
             let disp = displacement_samples(geometry, &g, nu, nv)?;
-            grid.point_data.push(DataArray::vectors("displacement", &disp));
+            grid.point_data
+                .push(DataArray::vectors("displacement", &disp));
             grid.write(path).map_err(io)
         }
         Geometry::Curve(c) => {
@@ -150,12 +179,21 @@ pub fn write_geometry_frame(path: &Path, geometry: &Geometry, p: &[f64], dofs_pe
     }
 }
 
-fn displacement_samples(rest: &Geometry, now: &Geometry, nu: usize, nv: usize) -> Result<Vec<[f64; 3]>, Failure> {
+fn displacement_samples(
+    rest: &Geometry,
+    now: &Geometry,
+    nu: usize,
+    nv: usize,
+) -> Result<Vec<[f64; 3]>, Failure> {
     match (rest, now) {
         (Geometry::Surface(a), Geometry::Surface(b)) => {
             let (_, _, pa) = a.uniform_grid(nu, nv).map_err(Failure::run)?;
             let (_, _, pb) = b.uniform_grid(nu, nv).map_err(Failure::run)?;
-            Ok(pa.iter().zip(&pb).map(|(x, y)| [y[0] - x[0], y[1] - x[1], y[2] - x[2]]).collect())
+            Ok(pa
+                .iter()
+                .zip(&pb)
+                .map(|(x, y)| [y[0] - x[0], y[1] - x[1], y[2] - x[2]])
+                .collect())
         }
         _ => Ok(Vec::new()),
     }
@@ -163,23 +201,37 @@ fn displacement_samples(rest: &Geometry, now: &Geometry, nu: usize, nv: usize) -
 
 fn parse_grid(spec: &str, n: usize) -> Result<Vec<usize>, Failure> {
     let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
-    let bad = || Failure::input(anyhow!("--grid {spec}: expected {n} integer{} ≥ 2", if n == 1 { "" } else { "s" }));
+    let bad = || {
+        Failure::input(anyhow!(
+            "--grid {spec}: expected {n} integer{} ≥ 2",
+            if n == 1 { "" } else { "s" }
+        ))
+    };
     if parts.len() != n {
         return Err(bad());
     }
-    let v: Vec<usize> = parts.iter().map(|p| p.parse::<usize>().map_err(|_| bad())).collect::<Result<_, _>>()?;
+    let v: Vec<usize> = parts
+        .iter()
+        .map(|p| p.parse::<usize>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
     if v.iter().any(|&x| x < 2) {
         return Err(bad());
     }
     if v.iter().product::<usize>() > 50_000_000 {
-        return Err(Failure::input(anyhow!("--grid {spec}: more than 5·10^7 points")));
+        return Err(Failure::input(anyhow!(
+            "--grid {spec}: more than 5·10^7 points"
+        )));
     }
     Ok(v)
 }
 
 /// `eval --grid NU,NV --out FILE`: the tessellated surface (or curve) as CSV, VTS, VTU or OBJ.
 pub fn write_tessellation(out: &Path, geometry: &Geometry, spec: &str) -> Result<(), Failure> {
-    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     if !matches!(ext.as_str(), "csv" | "vts" | "vtu" | "obj") {
         return Err(Failure::input(anyhow!(
             "--out {}: unknown format `{ext}` (use .csv, .vts, .vtu or .obj)",
@@ -192,9 +244,10 @@ pub fn write_tessellation(out: &Path, geometry: &Geometry, spec: &str) -> Result
             let (us, vs, pts) = s.uniform_grid(n[0], n[1]).map_err(Failure::run)?;
             match ext.as_str() {
                 "csv" => {
-                    let rows = pts.iter().enumerate().map(|(k, p)| {
-                        vec![us[k / vs.len()], vs[k % vs.len()], p[0], p[1], p[2]]
-                    });
+                    let rows = pts
+                        .iter()
+                        .enumerate()
+                        .map(|(k, p)| vec![us[k / vs.len()], vs[k % vs.len()], p[0], p[1], p[2]]);
                     write_csv(out, &["u", "v", "x", "y", "z"], rows).map_err(io)
                 }
                 "vts" => VtkStructured::new(n[0], n[1], pts).write(out).map_err(io),
@@ -203,7 +256,8 @@ pub fn write_tessellation(out: &Path, geometry: &Geometry, spec: &str) -> Result
                     for i in 0..n[0] - 1 {
                         for j in 0..n[1] - 1 {
                             let a = i * n[1] + j;
-                            grid.cells.push(Cell::Quad([a, a + n[1], a + n[1] + 1, a + 1]));
+                            grid.cells
+                                .push(Cell::Quad([a, a + n[1], a + n[1] + 1, a + 1]));
                         }
                     }
                     grid.write(out).map_err(io)
@@ -226,11 +280,20 @@ pub fn write_tessellation(out: &Path, geometry: &Geometry, spec: &str) -> Result
                 .map(|d| d.point)
                 .collect();
             match ext.as_str() {
-                "csv" => write_csv(out, &["u", "x", "y", "z"], us.iter().zip(&pts).map(|(u, p)| vec![*u, p[0], p[1], p[2]]))
-                    .map_err(io),
+                "csv" => write_csv(
+                    out,
+                    &["u", "x", "y", "z"],
+                    us.iter().zip(&pts).map(|(u, p)| vec![*u, p[0], p[1], p[2]]),
+                )
+                .map_err(io),
                 "obj" => {
                     let springs: Vec<[usize; 2]> = (1..pts.len()).map(|i| [i - 1, i]).collect();
-                    write_obj(out, &ObjMesh::lattice(pts, springs), "nurbspring tessellated curve").map_err(io)
+                    write_obj(
+                        out,
+                        &ObjMesh::lattice(pts, springs),
+                        "nurbspring tessellated curve",
+                    )
+                    .map_err(io)
                 }
                 _ => {
                     let mut grid = VtkUnstructured::new(pts);

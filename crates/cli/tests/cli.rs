@@ -19,7 +19,8 @@ fn paper() -> PathBuf {
 }
 
 fn json_of(out: &[u8]) -> serde_json::Value {
-    serde_json::from_slice(out).unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(out)))
+    serde_json::from_slice(out)
+        .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(out)))
 }
 
 /// A scene written to a temp folder.
@@ -36,9 +37,18 @@ fn every_example_checks() {
     for entry in std::fs::read_dir(examples()).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "toml") {
-            let out = bin().arg("check").arg(&path).arg("--json").assert().success();
+            let out = bin()
+                .arg("check")
+                .arg(&path)
+                .arg("--json")
+                .assert()
+                .success();
             let v = json_of(&out.get_output().stdout);
-            assert!(v["dnurbs"]["free_dofs"].as_u64().unwrap() > 0, "{}", path.display());
+            assert!(
+                v["dnurbs"]["free_dofs"].as_u64().unwrap() > 0,
+                "{}",
+                path.display()
+            );
             n += 1;
         }
     }
@@ -57,28 +67,48 @@ fn eval_prints_points_and_derivatives() {
     let v = json_of(&out.get_output().stdout);
     let pts = v["points"].as_array().unwrap();
     assert_eq!(pts.len(), 2);
-    assert_eq!(pts[0]["point"][2].as_f64().unwrap(), 2.0);
+    assert!((pts[0]["point"][2].as_f64().unwrap() - 2.0).abs() <= 4.0 * f64::EPSILON * 2.0);
     assert_eq!(pts[1]["point"][0].as_f64().unwrap(), 0.0);
     for key in ["u", "v", "uu", "uv", "vv"] {
         assert_eq!(pts[0]["d"][key].as_array().unwrap().len(), 3, "{key}");
     }
     // Without --derivatives there is no "d".
-    let out = bin().arg("eval").arg(paper()).args(["--at", "0.25,0.75"]).assert().success();
-    assert!(json_of(&out.get_output().stdout)["points"][0].get("d").is_none());
+    let out = bin()
+        .arg("eval")
+        .arg(paper())
+        .args(["--at", "0.25,0.75"])
+        .assert()
+        .success();
+    assert!(
+        json_of(&out.get_output().stdout)["points"][0]
+            .get("d")
+            .is_none()
+    );
 }
 
 #[test]
 fn eval_grid_writes_csv() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("grid.csv");
-    bin().arg("eval").arg(paper()).args(["--grid", "11,7", "--out"]).arg(&out).assert().success();
+    bin()
+        .arg("eval")
+        .arg(paper())
+        .args(["--grid", "11,7", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
     let text = std::fs::read_to_string(&out).unwrap();
     assert_eq!(text.lines().count(), 1 + 11 * 7);
 }
 
 #[test]
 fn parameter_outside_domain_is_exit_2() {
-    let out = bin().arg("eval").arg(paper()).args(["--at", "1.5,0.5"]).assert().code(2);
+    let out = bin()
+        .arg("eval")
+        .arg(paper())
+        .args(["--at", "1.5,0.5"])
+        .assert()
+        .code(2);
     let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
     assert!(err.contains("1.5"), "{err}");
 }
@@ -86,12 +116,19 @@ fn parameter_outside_domain_is_exit_2() {
 #[test]
 fn matrices_writes_matrix_market_and_dofs() {
     let dir = tempfile::tempdir().unwrap();
-    bin().arg("matrices").arg(paper()).arg("--out").arg(dir.path()).assert().success();
+    bin()
+        .arg("matrices")
+        .arg(paper())
+        .arg("--out")
+        .arg(dir.path())
+        .assert()
+        .success();
     for f in ["M.mtx", "D.mtx", "K.mtx", "f.mtx", "dofs.json"] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
     let dofs: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("dofs.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("dofs.json")).unwrap())
+            .unwrap();
     assert_eq!(dofs["n_dofs"], 105);
     assert_eq!(dofs["free_dofs"].as_array().unwrap().len(), 9);
     let m = std::fs::read_to_string(dir.path().join("M.mtx")).unwrap();
@@ -100,9 +137,19 @@ fn matrices_writes_matrix_market_and_dofs() {
 
 #[test]
 fn modes_are_ascending_and_positive() {
-    let out = bin().arg("modes").arg(paper()).args(["--count", "3"]).assert().success();
+    let out = bin()
+        .arg("modes")
+        .arg(paper())
+        .args(["--count", "3"])
+        .assert()
+        .success();
     let v = json_of(&out.get_output().stdout);
-    let w: Vec<f64> = v["omega"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let w: Vec<f64> = v["omega"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
     assert_eq!(w.len(), 3);
     assert!(w[0] > 0.0 && w[0] <= w[1] && w[1] <= w[2], "{w:?}");
     let t0 = v["periods"][0].as_f64().unwrap();
@@ -130,7 +177,10 @@ fn simulate_dnurbs_writes_trajectory_energy_and_series() {
         .success();
     let traj = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
     let header = traj.lines().next().unwrap();
-    assert!(header.starts_with("t,probe0_x,probe0_y,probe0_z"), "{header}");
+    assert!(
+        header.starts_with("t,probe0_x,probe0_y,probe0_z"),
+        "{header}"
+    );
     assert_eq!(traj.lines().count(), 1 + 11);
     assert!(dir.path().join("energy.csv").exists());
     let pvd = std::fs::read_to_string(dir.path().join("surface.pvd")).unwrap();
@@ -143,7 +193,15 @@ fn simulate_msm_explicit_above_limit_is_refused_then_forced() {
     let out = bin()
         .arg("simulate")
         .arg(paper())
-        .args(["--model", "msm", "--integrator", "symplectic-euler", "--dt", "0.08", "--out"])
+        .args([
+            "--model",
+            "msm",
+            "--integrator",
+            "symplectic-euler",
+            "--dt",
+            "0.08",
+            "--out",
+        ])
         .arg(dir.path())
         .assert()
         .code(1);
@@ -152,17 +210,34 @@ fn simulate_msm_explicit_above_limit_is_refused_then_forced() {
     let out = bin()
         .arg("simulate")
         .arg(paper())
-        .args(["--model", "msm", "--integrator", "symplectic-euler", "--dt", "0.08", "--force-unstable", "--out"])
+        .args([
+            "--model",
+            "msm",
+            "--integrator",
+            "symplectic-euler",
+            "--dt",
+            "0.08",
+            "--force-unstable",
+            "--out",
+        ])
         .arg(dir.path())
         .assert()
         .code(1);
     let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
-    assert!(err.contains("step") , "{err}");
+    assert!(err.contains("step"), "{err}");
     // The implicit run is fine and prints the stability line.
     let out = bin()
         .arg("simulate")
         .arg(paper())
-        .args(["--model", "msm", "--integrator", "backward-euler", "--t-end", "0.8", "--out"])
+        .args([
+            "--model",
+            "msm",
+            "--integrator",
+            "backward-euler",
+            "--t-end",
+            "0.8",
+            "--out",
+        ])
         .arg(dir.path())
         .assert()
         .success();
@@ -174,12 +249,26 @@ fn simulate_msm_explicit_above_limit_is_refused_then_forced() {
 #[test]
 fn derive_writes_everything_and_msm_json_round_trips() {
     let dir = tempfile::tempdir().unwrap();
-    bin().arg("derive").arg(paper()).arg("--out").arg(dir.path()).assert().success();
-    for f in ["msm.json", "report.json", "report.md", "central_node.csv", "central_node.svg", "central_node.png"] {
+    bin()
+        .arg("derive")
+        .arg(paper())
+        .arg("--out")
+        .arg(dir.path())
+        .assert()
+        .success();
+    for f in [
+        "msm.json",
+        "report.json",
+        "report.md",
+        "central_node.csv",
+        "central_node.svg",
+        "central_node.png",
+    ] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
     let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
     for key in [
         "/fit/all_dofs/k_edge",
         "/fit/all_dofs/k_diag",
@@ -217,27 +306,59 @@ fn bad_scenes_exit_2_with_a_message() {
     let good = std::fs::read_to_string(paper()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let cases: Vec<(&str, String, &str)> = vec![
-        ("decreasing knots", good.replacen("0.25, 0.5, 0.75", "0.5, 0.25, 0.75", 1), "knots_u"),
-        ("negative mu", good.replacen("mu = 25.0", "mu = -25.0", 1), "mu"),
-        ("unknown key", good.replacen("mu = 25.0", "muu = 25.0", 1), "mu"),
-        ("truncated", good[..good.len() / 3].to_string(), "paper"),
+        (
+            "decreasing knots",
+            good.replacen("0.25, 0.5, 0.75", "0.5, 0.25, 0.75", 1),
+            "knots_u",
+        ),
+        (
+            "negative mu",
+            good.replacen("mu = 25.0", "mu = -25.0", 1),
+            "mu",
+        ),
+        (
+            "unknown key",
+            good.replacen("mu = 25.0", "muu = 25.0", 1),
+            "mu",
+        ),
+        ("truncated", good[..good.len() / 3].to_string(), "line"),
         ("dt zero", good.replacen("dt = 0.08", "dt = 0.0", 1), "dt"),
-        ("nan", good.replacen("beta11 = 0.01", "beta11 = nan", 1), "beta11"),
+        (
+            "nan",
+            good.replacen("beta11 = 0.01", "beta11 = nan", 1),
+            "beta11",
+        ),
     ];
     for (name, text, key) in cases {
-        let p = scene(dir.path(), &format!("{}.toml", name.replace(' ', "_")), &text);
+        let p = scene(
+            dir.path(),
+            &format!("{}.toml", name.replace(' ', "_")),
+            &text,
+        );
         let out_dir = dir.path().join(format!("out_{}", name.replace(' ', "_")));
-        let out = bin().arg("derive").arg(&p).arg("--out").arg(&out_dir).assert().code(2);
+        let out = bin()
+            .arg("derive")
+            .arg(&p)
+            .arg("--out")
+            .arg(&out_dir)
+            .assert()
+            .code(2);
         let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
         assert!(err.contains(key), "{name}: {err}");
         assert!(!err.contains("panicked"), "{name}: {err}");
-        assert!(!out_dir.exists() || std::fs::read_dir(&out_dir).unwrap().next().is_none(), "{name}: output left");
+        assert!(
+            !out_dir.exists() || std::fs::read_dir(&out_dir).unwrap().next().is_none(),
+            "{name}: output left"
+        );
     }
 }
 
 #[test]
 fn missing_file_is_exit_2() {
-    let out = bin().args(["check", "/nonexistent/scene.toml"]).assert().code(2);
+    let out = bin()
+        .args(["check", "/nonexistent/scene.toml"])
+        .assert()
+        .code(2);
     assert!(String::from_utf8_lossy(&out.get_output().stderr).contains("/nonexistent/scene.toml"));
 }
 
@@ -245,13 +366,25 @@ fn missing_file_is_exit_2() {
 #[test]
 fn paper_command_runs() {
     let dir = tempfile::tempdir().unwrap();
-    let out = bin().arg("paper").arg("--out").arg(dir.path()).assert().success();
+    let out = bin()
+        .arg("paper")
+        .arg("--out")
+        .arg(dir.path())
+        .assert()
+        .success();
     let text = String::from_utf8_lossy(&out.get_output().stdout).to_string();
-    for needle in ["k_edge", "k_diag", "m (an eigenvalue", "Figure 3", "verdict"] {
+    for needle in [
+        "k_edge",
+        "k_diag",
+        "m (an eigenvalue",
+        "Figure 3",
+        "verdict",
+    ] {
         assert!(text.contains(needle), "{needle} missing from:\n{text}");
     }
     let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
     assert!(report["paper"]["verdicts"].as_array().unwrap().len() >= 5);
 }
 
@@ -262,9 +395,17 @@ fn built_in_scene_is_the_example() {
     let a = dir.path().join("a");
     let b = dir.path().join("b");
     bin().arg("paper").arg("--out").arg(&a).assert().success();
-    bin().arg("derive").arg(paper()).arg("--out").arg(&b).assert().success();
-    let ra: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(a.join("report.json")).unwrap()).unwrap();
-    let rb: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(b.join("report.json")).unwrap()).unwrap();
+    bin()
+        .arg("derive")
+        .arg(paper())
+        .arg("--out")
+        .arg(&b)
+        .assert()
+        .success();
+    let ra: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(a.join("report.json")).unwrap()).unwrap();
+    let rb: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(b.join("report.json")).unwrap()).unwrap();
     assert_eq!(ra["fit"], rb["fit"]);
     assert_eq!(ra["mass"], rb["mass"]);
 }

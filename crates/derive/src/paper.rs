@@ -554,7 +554,11 @@ fn verdicts(
                     d.rest_shape,
                     fmt_period(d.dnurbs_period),
                     fmt_period(d.msm_period),
-                    if d.msm_stopped.is_some() { "; MSM run failed" } else { "" }
+                    if d.msm_stopped.is_some() {
+                        "; MSM run failed"
+                    } else {
+                        ""
+                    }
                 )
             })
             .collect::<Vec<_>>()
@@ -575,7 +579,11 @@ fn verdicts(
             Verdict::NotReproduced
         };
         let why = match verdict {
-            Verdict::Reproduced => format!("relative RMS {short:.3} over {} s and {long:.3} over {} s (agreement below 0.1)", base.t_end, 10.0 * base.t_end),
+            Verdict::Reproduced => format!(
+                "relative RMS {short:.3} over {} s and {long:.3} over {} s (agreement below 0.1)",
+                base.t_end,
+                10.0 * base.t_end
+            ),
             Verdict::Partly => format!(
                 "relative RMS {short:.3} over the paper's {} s, which is a fraction of the D-NURBS period, but {long:.3} over {} s: the MSM's out-of-plane restoring force is purely geometric (no linear stiffness out of the plane), the D-NURBS bending stiffness is linear, and the two drift apart",
                 base.t_end,
@@ -587,7 +595,9 @@ fn verdicts(
             ),
         };
         out.push(VerdictLine {
-            quantity: format!("Figure 3 agreement of the central node's z ({label} parameters, Newmark)"),
+            quantity: format!(
+                "Figure 3 agreement of the central node's z ({label} parameters, Newmark)"
+            ),
             paper: "suitable agreement over 4 s".to_string(),
             obtained,
             verdict,

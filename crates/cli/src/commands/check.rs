@@ -79,7 +79,10 @@ pub fn run(_ctx: &Context, args: CheckArgs) -> CmdResult {
         });
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report).map_err(Failure::run)?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(Failure::run)?
+        );
     } else {
         println!("{}: valid", args.scene.display());
         print_tree(&report, 1);

@@ -30,20 +30,30 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     let config = convert::experiment(&scene)?;
     let out = prepare_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
-    let (derivation, _) = nurbspring_derive::derive_msm(&config, Some(ctx.cancel.clone()), &mut |d, t| {
-        bar.set_total(t as u64);
-        bar.set(d as u64);
-    })
-    .map_err(convert::derive_failure)?;
+    let (derivation, _) =
+        nurbspring_derive::derive_msm(&config, Some(ctx.cancel.clone()), &mut |d, t| {
+            bar.set_total(t as u64);
+            bar.set(d as u64);
+        })
+        .map_err(convert::derive_failure)?;
     bar.finish();
-    write_derivation(&out, &args.scene.display().to_string(), &scene, &derivation, None, "")?;
+    write_derivation(
+        &out,
+        &args.scene.display().to_string(),
+        &scene,
+        &derivation,
+        None,
+        "",
+    )?;
     if !ctx.global.quiet {
         let d = &derivation.derived;
         println!(
             "derived MSM: k_edge = {:.6}, k_diag = {:.6}{}, m = {:.6}; dt_critical = {:.5}; central node rel. RMS = {:.4} ({})",
             d.k_edge,
             d.k_diag,
-            d.k_bend.map(|k| format!(", k_bend = {k:.6}")).unwrap_or_default(),
+            d.k_bend
+                .map(|k| format!(", k_bend = {k:.6}"))
+                .unwrap_or_default(),
             d.m,
             d.dt_critical,
             d.validation.relative_rms,
@@ -97,7 +107,7 @@ pub fn write_derivation(
             integrator: d.derived.validation.integrator.clone(),
         },
     };
-    nurbspring_io::output::write_json(&out.join("msm.json"), &msm).map_err(io)?;
+    nurbspring_io::output::write_json(out.join("msm.json"), &msm).map_err(io)?;
 
     let mut report = serde_json::json!({
         "scene": scene_label,
@@ -122,7 +132,7 @@ pub fn write_derivation(
     if let Some(p) = paper {
         report["paper"] = serde_json::to_value(p).unwrap_or_default();
     }
-    nurbspring_io::output::write_json(&out.join("report.json"), &report).map_err(io)?;
+    nurbspring_io::output::write_json(out.join("report.json"), &report).map_err(io)?;
 
     // Central node, z over time.
     let t = &d.dnurbs_trajectory.t;
@@ -130,19 +140,30 @@ pub fn write_derivation(
     let zm = d.msm_trajectory.component(0, 2);
     let n = t.len();
     let rows = (0..n).map(|s| vec![t[s], zd[s], zm.get(s).copied().unwrap_or(f64::NAN)]);
-    nurbspring_io::output::write_csv(&out.join("central_node.csv"), &["t", "dnurbs_z", "msm_z"], rows).map_err(io)?;
+    nurbspring_io::output::write_csv(
+        out.join("central_node.csv"),
+        &["t", "dnurbs_z", "msm_z"],
+        rows,
+    )
+    .map_err(io)?;
 
     let mut series = vec![
-        nurbspring_io::plot::Series::line("D-NURBS", t.iter().copied().zip(zd.iter().copied()).collect()),
         nurbspring_io::plot::Series::line(
-            &format!("derived MSM ({})", d.derived.validation.integrator),
+            "D-NURBS",
+            t.iter().copied().zip(zd.iter().copied()).collect(),
+        ),
+        nurbspring_io::plot::Series::line(
+            format!("derived MSM ({})", d.derived.validation.integrator),
             t.iter().copied().zip(zm.iter().copied()).collect(),
         ),
     ];
     if let (Some(g), Some(gt)) = (&d.given, &d.given_trajectory) {
         let zg = gt.component(0, 2);
         series.push(nurbspring_io::plot::Series::line(
-            &format!("scene's MSM k_edge={}, k_diag={}, m={} ({})", g.k_edge, g.k_diag, g.m, g.validation.integrator),
+            format!(
+                "scene's MSM k_edge={}, k_diag={}, m={} ({})",
+                g.k_edge, g.k_diag, g.m, g.validation.integrator
+            ),
             gt.t.iter().copied().zip(zg.iter().copied()).collect(),
         ));
     }
@@ -173,7 +194,10 @@ pub fn write_derivation(
                     "Mass candidates: eigenvalues of M vs RMS error of the central node",
                     "m (eigenvalue of M)",
                     "RMS error [m]",
-                    &[nurbspring_io::plot::Series::points("candidates", pts.clone())],
+                    &[nurbspring_io::plot::Series::points(
+                        "candidates",
+                        pts.clone(),
+                    )],
                     true,
                 )
                 .map_err(io)?;
@@ -183,21 +207,38 @@ pub fn write_derivation(
     let energy_series = vec![
         nurbspring_io::plot::Series::line(
             "D-NURBS kinetic + elastic",
-            d.dnurbs_trajectory.t.iter().zip(&d.dnurbs_trajectory.energy).map(|(t, e)| (*t, e[0] + e[1])).collect(),
+            d.dnurbs_trajectory
+                .t
+                .iter()
+                .zip(&d.dnurbs_trajectory.energy)
+                .map(|(t, e)| (*t, e[0] + e[1]))
+                .collect(),
         ),
         nurbspring_io::plot::Series::line(
             "derived MSM kinetic + elastic",
-            d.msm_trajectory.t.iter().zip(&d.msm_trajectory.energy).map(|(t, e)| (*t, e[0] + e[1])).collect(),
+            d.msm_trajectory
+                .t
+                .iter()
+                .zip(&d.msm_trajectory.energy)
+                .map(|(t, e)| (*t, e[0] + e[1]))
+                .collect(),
         ),
     ];
     for ext in ["svg", "png"] {
-        crate::output::plot(&out.join(format!("energy.{ext}")), "Energy over time", "t [s]", "energy [J]", &energy_series, false)
-            .map_err(io)?;
+        crate::output::plot(
+            &out.join(format!("energy.{ext}")),
+            "Energy over time",
+            "t [s]",
+            "energy [J]",
+            &energy_series,
+            false,
+        )
+        .map_err(io)?;
     }
     crate::output::write_lattice_vtu(&out.join("lattice.vtu"), &d.lattice)?;
 
     let md = report_markdown(scene_label, d, paper_table);
-    nurbspring_io::atomic::write_atomic_bytes(&out.join("report.md"), md.as_bytes()).map_err(io)?;
+    nurbspring_io::atomic::write_atomic_bytes(out.join("report.md"), md.as_bytes()).map_err(io)?;
     Ok(())
 }
 
@@ -220,28 +261,45 @@ fn param_rows(s: &mut String, label: &str, p: &ParameterSet) {
         p.k_diag,
         p.m,
         p.dt_critical,
-        if p.dt_exceeds_explicit_limit { "yes" } else { "no" },
+        if p.dt_exceeds_explicit_limit {
+            "yes"
+        } else {
+            "no"
+        },
         p.relative_residual_all_dofs,
         p.relative_residual_free_dofs,
         v.integrator,
         v.rms,
         v.relative_rms,
-        v.dnurbs_period.map(|x| format!("{x:.3}")).unwrap_or_else(|| "-".into()),
-        v.msm_period.map(|x| format!("{x:.3}")).unwrap_or_else(|| "-".into()),
+        v.dnurbs_period
+            .map(|x| format!("{x:.3}"))
+            .unwrap_or_else(|| "-".into()),
+        v.msm_period
+            .map(|x| format!("{x:.3}"))
+            .unwrap_or_else(|| "-".into()),
     );
 }
 
 fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# nurbspring derivation report\n\nScene: `{scene_label}`\n");
+    let _ = writeln!(
+        s,
+        "# nurbspring derivation report\n\nScene: `{scene_label}`\n"
+    );
     let _ = writeln!(s, "## Stiffness fit (paper eq. 15)\n");
-    let _ = writeln!(s, "| reading | k_edge | k_diag | k_bend | relative residual |\n|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| reading | k_edge | k_diag | k_bend | relative residual |\n|---|---|---|---|---|"
+    );
     for (name, f) in [
         ("all dofs, unconstrained (literal)", &d.fit.all_dofs),
         ("free dofs, unconstrained", &d.fit.free_dofs),
         ("all dofs, k >= 0", &d.fit.all_dofs_nonnegative),
         ("free dofs, k >= 0", &d.fit.free_dofs_nonnegative),
-        ("trust region (selected reading)", &d.fit.trust_region.result),
+        (
+            "trust region (selected reading)",
+            &d.fit.trust_region.result,
+        ),
     ] {
         let _ = writeln!(
             s,
@@ -255,17 +313,27 @@ fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> Stri
     let _ = writeln!(
         s,
         "\nSelected: {}. Trust region: {} iterations, largest relative difference to the closed form {:.2e}.\n",
-        d.fit.selected_reading, d.fit.trust_region.iterations, d.fit.trust_region.max_relative_difference_to_closed_form
+        d.fit.selected_reading,
+        d.fit.trust_region.iterations,
+        d.fit.trust_region.max_relative_difference_to_closed_form
     );
     let _ = writeln!(s, "## Mass (Section III)\n\n{}.\n", d.mass.rule);
     let _ = writeln!(
         s,
         "Distinct non-null eigenvalues of M ({}): {}\n",
         d.mass.eigenvalues.len(),
-        d.mass.eigenvalues.iter().map(|v| format!("{v:.6}")).collect::<Vec<_>>().join(", ")
+        d.mass
+            .eigenvalues
+            .iter()
+            .map(|v| format!("{v:.6}"))
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     if !d.mass.candidates.is_empty() {
-        let _ = writeln!(s, "| m | RMS | max abs | integrator | note |\n|---|---|---|---|---|");
+        let _ = writeln!(
+            s,
+            "| m | RMS | max abs | integrator | note |\n|---|---|---|---|---|"
+        );
         for c in &d.mass.candidates {
             let _ = writeln!(
                 s,
@@ -299,7 +367,10 @@ fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> Stri
         }
     }
     if !paper_table.is_empty() {
-        let _ = writeln!(s, "\n## Reproduction of the paper\n\n```text\n{paper_table}```");
+        let _ = writeln!(
+            s,
+            "\n## Reproduction of the paper\n\n```text\n{paper_table}```"
+        );
     }
     s
 }

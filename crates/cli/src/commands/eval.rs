@@ -53,7 +53,9 @@ pub fn run(_ctx: &Context, args: EvalArgs) -> CmdResult {
     let scene = convert::load_scene(&args.scene)?;
     let geometry = convert::geometry(&scene)?;
     if args.at.is_empty() && args.grid.is_none() {
-        return Err(Failure::input(anyhow!("nothing to evaluate: give --at U,V (repeatable) or --grid NU,NV --out FILE")));
+        return Err(Failure::input(anyhow!(
+            "nothing to evaluate: give --at U,V (repeatable) or --grid NU,NV --out FILE"
+        )));
     }
     let order = args.derivatives as usize;
     let mut points = Vec::new();
@@ -94,14 +96,16 @@ pub fn run(_ctx: &Context, args: EvalArgs) -> CmdResult {
         }
     }
     if let Some(grid) = &args.grid {
-        let out = args
-            .out
-            .as_ref()
-            .ok_or_else(|| Failure::input(anyhow!("--grid needs --out FILE (.csv, .vts, .vtu or .obj)")))?;
+        let out = args.out.as_ref().ok_or_else(|| {
+            Failure::input(anyhow!(
+                "--grid needs --out FILE (.csv, .vts, .vtu or .obj)"
+            ))
+        })?;
         crate::output::write_tessellation(out, &geometry, grid)?;
     }
     if !args.at.is_empty() {
-        let text = serde_json::to_string_pretty(&json!({"points": points})).map_err(Failure::run)?;
+        let text =
+            serde_json::to_string_pretty(&json!({"points": points})).map_err(Failure::run)?;
         println!("{text}");
     }
     Ok(())

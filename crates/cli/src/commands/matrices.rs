@@ -30,11 +30,17 @@ pub fn run(ctx: &Context, args: MatricesArgs) -> CmdResult {
     } else {
         "interleaved per control point: x, y, z; control point k = i * n_v + j (i along u)"
     };
-    let comment = format!("nurbspring D-NURBS matrix of {}; dof ordering: {ordering}", args.scene.display());
-    nurbspring_io::output::write_matrix_market(&out.join("M.mtx"), &m.mass, &comment).map_err(io)?;
-    nurbspring_io::output::write_matrix_market(&out.join("D.mtx"), &m.damping, &comment).map_err(io)?;
-    nurbspring_io::output::write_matrix_market(&out.join("K.mtx"), &m.stiffness, &comment).map_err(io)?;
-    nurbspring_io::output::write_matrix_market_vector(&out.join("f.mtx"), &m.force, &comment).map_err(io)?;
+    let comment = format!(
+        "nurbspring D-NURBS matrix of {}; dof ordering: {ordering}",
+        args.scene.display()
+    );
+    nurbspring_io::output::write_matrix_market(out.join("M.mtx"), &m.mass, &comment).map_err(io)?;
+    nurbspring_io::output::write_matrix_market(out.join("D.mtx"), &m.damping, &comment)
+        .map_err(io)?;
+    nurbspring_io::output::write_matrix_market(out.join("K.mtx"), &m.stiffness, &comment)
+        .map_err(io)?;
+    nurbspring_io::output::write_matrix_market_vector(out.join("f.mtx"), &m.force, &comment)
+        .map_err(io)?;
     let dof_map = model.dof_map();
     let dofs = json!({
         "ordering": ordering,
@@ -47,7 +53,7 @@ pub fn run(ctx: &Context, args: MatricesArgs) -> CmdResult {
         "files": {"M": "M.mtx", "D": "D.mtx", "K": "K.mtx", "f": "f.mtx"},
         "matrices_cover": "all dofs, before constraints are applied",
     });
-    nurbspring_io::output::write_json(&out.join("dofs.json"), &dofs).map_err(io)?;
+    nurbspring_io::output::write_json(out.join("dofs.json"), &dofs).map_err(io)?;
     if !ctx.global.quiet {
         println!(
             "wrote M, D, K ({} × {}, {} non-zeros in K), f and dofs.json to {}",

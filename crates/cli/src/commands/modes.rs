@@ -21,7 +21,9 @@ pub struct ModesArgs {
 /// Prints the lowest angular frequencies and periods as JSON.
 pub fn run(_ctx: &Context, args: ModesArgs) -> CmdResult {
     if args.count == 0 {
-        return Err(Failure::input(anyhow::anyhow!("--count must be at least 1")));
+        return Err(Failure::input(anyhow::anyhow!(
+            "--count must be at least 1"
+        )));
     }
     let scene = convert::load_scene(&args.scene)?;
     let model = convert::dnurbs_model(&scene)?;
@@ -29,7 +31,13 @@ pub fn run(_ctx: &Context, args: ModesArgs) -> CmdResult {
     let periods: Vec<Option<f64>> = modes
         .omega
         .iter()
-        .map(|&w| if w > 0.0 { Some(2.0 * std::f64::consts::PI / w) } else { None })
+        .map(|&w| {
+            if w > 0.0 {
+                Some(2.0 * std::f64::consts::PI / w)
+            } else {
+                None
+            }
+        })
         .collect();
     let text = serde_json::to_string_pretty(&json!({
         "omega": modes.omega,

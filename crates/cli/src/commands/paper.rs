@@ -23,8 +23,11 @@ pub struct PaperArgs {
 
 /// Runs the paper's experiment and prints the reproduction table.
 pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
-    let scene = nurbspring_io::scene::Scene::from_str(PAPER_SCENE, std::path::Path::new("<built-in paper scene>"))
-        .map_err(Failure::input)?;
+    let scene = nurbspring_io::scene::Scene::from_str(
+        PAPER_SCENE,
+        std::path::Path::new("<built-in paper scene>"),
+    )
+    .map_err(Failure::input)?;
     let config = convert::experiment(&scene)?;
     let out = prepare_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
@@ -35,7 +38,14 @@ pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
     .map_err(convert::derive_failure)?;
     bar.finish();
     let table = verdict_table(&report);
-    write_derivation(&out, "built-in paper scene (examples/paper.toml)", &scene, &derivation, Some(&report), &table)?;
+    write_derivation(
+        &out,
+        "built-in paper scene (examples/paper.toml)",
+        &scene,
+        &derivation,
+        Some(&report),
+        &table,
+    )?;
     println!("{table}");
     println!("Outputs in {}", out.display());
     Ok(())
@@ -44,7 +54,10 @@ pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
 /// The human table of the reproduction: each paper number, what nurbspring obtains, the verdict.
 pub fn verdict_table(report: &nurbspring_derive::paper::PaperReport) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "Reproduction of Section IV (paper value | nurbspring | verdict)");
+    let _ = writeln!(
+        s,
+        "Reproduction of Section IV (paper value | nurbspring | verdict)"
+    );
     let _ = writeln!(s, "{}", "=".repeat(78));
     for v in &report.verdicts {
         let _ = writeln!(s, "{}", v.quantity);
@@ -53,21 +66,31 @@ pub fn verdict_table(report: &nurbspring_derive::paper::PaperReport) -> String {
         let _ = writeln!(s, "  verdict:  {} - {}", v.verdict.label(), v.why);
     }
     let _ = writeln!(s, "{}", "-".repeat(78));
-    let _ = writeln!(s, "Stiffness fit, every reading (net, dofs, constraint: k_edge, k_diag, residual; residual at the paper's k)");
+    let _ = writeln!(
+        s,
+        "Stiffness fit, every reading (net, dofs, constraint: k_edge, k_diag, residual; residual at the paper's k)"
+    );
     for f in &report.fits {
         let _ = writeln!(
             s,
             "  {:<8} {:<4} {:<13} k_edge = {:>10.5}  k_diag = {:>10.5}  residual = {:.4}  (paper's k: {:.4})",
             f.net.name(),
             f.dofs.name(),
-            if f.nonnegative { "k >= 0" } else { "unconstrained" },
+            if f.nonnegative {
+                "k >= 0"
+            } else {
+                "unconstrained"
+            },
             f.result.k(nurbspring_msm::SpringKind::Structural),
             f.result.k(nurbspring_msm::SpringKind::Shear),
             f.result.relative_residual,
             f.residual_at_paper_values
         );
     }
-    let _ = writeln!(s, "Side-by-side runs, central node z (net, rest shape, parameters, integrator: dt_crit, rel. RMS, periods D-NURBS/MSM)");
+    let _ = writeln!(
+        s,
+        "Side-by-side runs, central node z (net, rest shape, parameters, integrator: dt_crit, rel. RMS, periods D-NURBS/MSM)"
+    );
     for d in &report.dynamics {
         let _ = writeln!(
             s,
@@ -78,9 +101,17 @@ pub fn verdict_table(report: &nurbspring_derive::paper::PaperReport) -> String {
             d.integrator,
             d.dt_critical,
             d.relative_rms,
-            d.dnurbs_period.map(|p| format!("{p:.3}")).unwrap_or_else(|| "-".into()),
-            d.msm_period.map(|p| format!("{p:.3}")).unwrap_or_else(|| "-".into()),
-            if d.msm_stopped.is_some() { "  (MSM run stopped: diverged)" } else { "" }
+            d.dnurbs_period
+                .map(|p| format!("{p:.3}"))
+                .unwrap_or_else(|| "-".into()),
+            d.msm_period
+                .map(|p| format!("{p:.3}"))
+                .unwrap_or_else(|| "-".into()),
+            if d.msm_stopped.is_some() {
+                "  (MSM run stopped: diverged)"
+            } else {
+                ""
+            }
         );
     }
     s

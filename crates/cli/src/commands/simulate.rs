@@ -94,11 +94,12 @@ impl Recorder {
     fn finish(self, out: &Path, pvd: &str) -> Result<(), Failure> {
         let io = |e: nurbspring_io::OutputError| Failure::run(e);
         let header: Vec<&str> = self.header.iter().map(String::as_str).collect();
-        nurbspring_io::output::write_csv(&out.join("trajectory.csv"), &header, self.rows.into_iter()).map_err(io)?;
+        nurbspring_io::output::write_csv(out.join("trajectory.csv"), &header, self.rows)
+            .map_err(io)?;
         nurbspring_io::output::write_csv(
-            &out.join("energy.csv"),
+            out.join("energy.csv"),
             &["t", "kinetic", "elastic", "total"],
-            self.energy.into_iter(),
+            self.energy,
         )
         .map_err(io)?;
         crate::output::write_pvd(&out.join(pvd), &self.frames).map_err(io)?;
@@ -126,10 +127,14 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
 
 fn check_time(dt: f64, t_end: f64) -> Result<(), Failure> {
     if !(dt > 0.0 && dt.is_finite()) {
-        return Err(Failure::input(anyhow!("--dt must be positive and finite, got {dt}")));
+        return Err(Failure::input(anyhow!(
+            "--dt must be positive and finite, got {dt}"
+        )));
     }
     if !(t_end > 0.0 && t_end.is_finite()) {
-        return Err(Failure::input(anyhow!("--t-end must be positive and finite, got {t_end}")));
+        return Err(Failure::input(anyhow!(
+            "--t-end must be positive and finite, got {t_end}"
+        )));
     }
     if t_end / dt > 1e8 {
         return Err(Failure::input(anyhow!(
@@ -145,7 +150,11 @@ fn parse_integrator(name: &str, allowed: &[IntegratorKind]) -> Result<Integrator
         Some(k) if allowed.contains(&k) => Ok(k),
         _ => Err(Failure::input(anyhow!(
             "--integrator {name}: expected one of {}",
-            allowed.iter().map(|k| k.name()).collect::<Vec<_>>().join(", ")
+            allowed
+                .iter()
+                .map(|k| k.name())
+                .collect::<Vec<_>>()
+                .join(", ")
         ))),
     }
 }
@@ -155,8 +164,12 @@ fn parse_integrator(name: &str, allowed: &[IntegratorKind]) -> Result<Integrator
 fn run_outcome(result: Result<nurbspring_sim::RunSummary, SimError>) -> Result<(), Failure> {
     match result {
         Ok(_) => Ok(()),
-        Err(e @ SimError::Unstable { .. }) => Err(Failure::run(anyhow!("{e} (pass --force-unstable to run anyway)"))),
-        Err(e @ (SimError::InvalidTimeStep { .. } | SimError::InvalidDuration { .. })) => Err(Failure::input(e)),
+        Err(e @ SimError::Unstable { .. }) => Err(Failure::run(anyhow!(
+            "{e} (pass --force-unstable to run anyway)"
+        ))),
+        Err(e @ (SimError::InvalidTimeStep { .. } | SimError::InvalidDuration { .. })) => {
+            Err(Failure::input(e))
+        }
         Err(e) => Err(Failure::run(e)),
     }
 }
@@ -171,7 +184,11 @@ fn run_dnurbs(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
     let integrator = match &args.integrator {
         Some(name) => parse_integrator(
             name,
-            &[IntegratorKind::TerzopoulosQin, IntegratorKind::Newmark, IntegratorKind::Modal],
+            &[
+                IntegratorKind::TerzopoulosQin,
+                IntegratorKind::Newmark,
+                IntegratorKind::Modal,
+            ],
         )?,
         None => sim.dnurbs_integrator,
     };
@@ -189,10 +206,16 @@ fn run_dnurbs(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
         let mut row = vec![t];
         row.extend_from_slice(&pos);
         rec.rows.push(row);
-        rec.energy.push(vec![t, kinetic, potential, kinetic + potential]);
-        if step % save_every == 0 && rec.frame_error.is_none() {
+        rec.energy
+            .push(vec![t, kinetic, potential, kinetic + potential]);
+        if step.is_multiple_of(save_every) && rec.frame_error.is_none() {
             let name = format!("surface_{:06}.vts", rec.frames.len());
-            match crate::output::write_geometry_frame(&out.join(&name), model.geometry(), p, model.matrices().dofs_per_point) {
+            match crate::output::write_geometry_frame(
+                &out.join(&name),
+                model.geometry(),
+                p,
+                model.matrices().dofs_per_point,
+            ) {
                 Ok(()) => rec.frames.push((t, name)),
                 Err(e) => rec.frame_error = Some(e),
             }
@@ -214,7 +237,11 @@ fn run_dnurbs(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
     rec.finish(&out, "surface.pvd")?;
     result?;
     if !ctx.global.quiet {
-        println!("D-NURBS run ({}) written to {}", integrator.name(), out.display());
+        println!(
+            "D-NURBS run ({}) written to {}",
+            integrator.name(),
+            out.display()
+        );
     }
     Ok(out)
 }
@@ -265,8 +292,9 @@ fn run_msm(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
             row.extend_from_slice(&x[3 * a..3 * a + 3]);
         }
         rec.rows.push(row);
-        rec.energy.push(vec![s.t, s.kinetic, s.potential, s.kinetic + s.potential]);
-        if s.step % save_every == 0 && rec.frame_error.is_none() {
+        rec.energy
+            .push(vec![s.t, s.kinetic, s.potential, s.kinetic + s.potential]);
+        if s.step.is_multiple_of(save_every) && rec.frame_error.is_none() {
             let name = format!("lattice_{:06}.vtu", rec.frames.len());
             match crate::output::write_lattice_frame(&out.join(&name), &lattice, &x) {
                 Ok(()) => rec.frames.push((s.t, name)),
@@ -280,7 +308,11 @@ fn run_msm(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
     rec.finish(&out, "lattice.pvd")?;
     result?;
     if !ctx.global.quiet {
-        println!("MSM run ({}) written to {}", integrator.name(), out.display());
+        println!(
+            "MSM run ({}) written to {}",
+            integrator.name(),
+            out.display()
+        );
     }
     Ok(out)
 }

@@ -22,8 +22,10 @@ pub struct StabilityArgs {
 pub fn run(_ctx: &Context, args: StabilityArgs) -> CmdResult {
     let (model, _, _) = convert::msm_model(&args.scene, &args.overrides)?;
     let s = model.stability().map_err(convert::msm_failure)?;
-    let text = serde_json::to_string_pretty(&json!({"omega_max": s.omega_max, "dt_critical": s.dt_critical}))
-        .map_err(Failure::run)?;
+    let text = serde_json::to_string_pretty(
+        &json!({"omega_max": s.omega_max, "dt_critical": s.dt_critical}),
+    )
+    .map_err(Failure::run)?;
     println!("{text}");
     Ok(())
 }
