@@ -208,8 +208,10 @@ pub struct Simulation {
     pub dnurbs_integrator: IntegratorKind,
     /// MSM integrator.
     pub msm_integrator: IntegratorKind,
-    /// Frame every n steps.
+    /// Record a sample every n steps.
     pub save_every: usize,
+    /// Write a ParaView frame every n samples.
+    pub vtk_every: usize,
 }
 
 /// `[simulation]`.
@@ -221,6 +223,7 @@ pub fn simulation(scene: &Scene) -> Result<Simulation, Failure> {
         dnurbs_integrator: s.dnurbs_integrator.kind(),
         msm_integrator: s.msm_integrator.kind(),
         save_every: s.save_every.max(1),
+        vtk_every: scene.output.vtk_every.max(1),
     })
 }
 
@@ -423,8 +426,10 @@ pub struct MsmRun {
     pub integrator: IntegratorKind,
     /// Probe nodes, the node nearest (0.5, 0.5) first.
     pub probe_nodes: Vec<usize>,
-    /// Frame every n steps.
+    /// Record a sample every n steps.
     pub save_every: usize,
+    /// Write a ParaView frame every n samples.
+    pub vtk_every: usize,
 }
 
 /// msm.json as written by `derive`: the lattice plus optional run settings.
@@ -462,6 +467,16 @@ pub fn msm_model(
         return msm_from_json(path, overrides);
     }
     let scene = load_scene(path)?;
+    msm_model_from_scene(&scene, overrides)
+}
+
+/// The MSM of a parsed scene (see [`msm_model`]).
+pub fn msm_model_from_scene(
+    scene: &Scene,
+    overrides: &MsmOverrides,
+) -> Result<(MsmModel, State, MsmRun), Failure> {
+    let path = scene.path.as_path();
+    let scene = scene.clone();
     let model = dnurbs_model(&scene)?;
     let Geometry::Surface(surface) = model.geometry() else {
         return Err(Failure::input(anyhow!(
@@ -496,6 +511,7 @@ pub fn msm_model(
             integrator: sim.msm_integrator,
             probe_nodes,
             save_every: sim.save_every,
+            vtk_every: sim.vtk_every,
         },
     ))
 }
@@ -574,6 +590,7 @@ fn msm_from_json(
             integrator,
             probe_nodes: vec![centre],
             save_every: 1,
+            vtk_every: 1,
         },
     ))
 }

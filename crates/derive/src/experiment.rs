@@ -302,6 +302,46 @@ pub struct Derivation {
     pub omega: SparseMatrix,
     /// Initial node velocities `Ω ṗ(0)` (eq. 18), per node.
     pub node_velocities: Vec<[f64; 3]>,
+    /// Angular frequencies of both linearized models, lowest first.
+    pub spectrum: Spectrum,
+}
+
+/// Angular frequencies (rad/s) of the constrained D-NURBS and of the derived MSM linearized at
+/// rest, lowest first (the MSM's zero frequencies are its directions without linear stiffness).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Spectrum {
+    /// D-NURBS: `K φ = ω² M φ` on the free dofs.
+    pub dnurbs: Vec<f64>,
+    /// MSM: `K_T φ = ω² M_S φ` on the free node dofs.
+    pub msm: Vec<f64>,
+}
+
+/// Largest model whose full spectrum is reported (dense eigenproblems).
+const MAX_SPECTRUM_DOFS: usize = 1500;
+
+fn msm_spectrum(lattice: &SpringLattice) -> Result<Vec<f64>, DeriveError> {
+    use nurbspring_sim::DynamicModel;
+    let model = MsmModel::new(lattice.clone())?;
+    let n = model.n_dofs();
+    if n == 0 || n > MAX_SPECTRUM_DOFS {
+        return Ok(Vec::new());
+    }
+    let q0 = model.initial_positions().to_vec();
+    let k = model.tangent_stiffness(&q0).to_dense();
+    let m = model.mass().to_sparse().to_dense();
+    let eig = nurbspring_linalg::generalized_symmetric_eigen(&k, &m)?;
+    let scale = eig.values.iter().map(|x| x.abs()).fold(0.0, f64::max);
+    Ok(eig
+        .values
+        .iter()
+        .map(|&l| {
+            if l.abs() <= 1e-12 * scale {
+                0.0
+            } else {
+                l.max(0.0).sqrt()
+            }
+        })
+        .collect())
 }
 
 /// The pieces shared by every reading: model, lattice, Ω, unit matrices, fits.
@@ -757,6 +797,14 @@ pub fn derive_msm(
         None => (None, None),
     };
     let lattice = setup.lattice_with(&selected, selected_m);
+    let spectrum = Spectrum {
+        dnurbs: if setup.model.n_free() <= MAX_SPECTRUM_DOFS {
+            setup.model.modes(setup.model.n_free())?.omega
+        } else {
+            Vec::new()
+        },
+        msm: msm_spectrum(&lattice)?,
+    };
     let probe_nodes: Vec<usize> = setup
         .probes
         .iter()
@@ -781,6 +829,7 @@ pub fn derive_msm(
         msm_trajectory: msm_traj,
         omega: setup.omega.clone(),
         node_velocities: setup.node_velocities.clone(),
+        spectrum,
     };
     Ok((derivation, setup))
 }

@@ -40,7 +40,8 @@ mod validation;
 pub use error::DeriveError;
 pub use experiment::{
     Derivation, ExperimentConfig, FitMethod, FitOptions, FitReport, FitResult, MassCandidate,
-    MassChoice, MassReport, ParameterSet, Setup, TrustRegionReport, ValidationReport, derive_msm,
+    MassChoice, MassReport, ParameterSet, Setup, Spectrum, TrustRegionReport, ValidationReport,
+    derive_msm,
 };
 pub use fit::{FitDofs, StiffnessFit, TrustRegionOutcome};
 pub use mass::{distinct_non_null, mass_eigenvalues};

@@ -379,10 +379,15 @@ pub fn reproduce(
 
 fn fmt_reading(r: &FitReading) -> String {
     format!(
-        "{} net, {} dofs{}",
+        "{} net, {} dofs{}{}",
         r.net.name(),
         r.dofs.name(),
-        if r.nonnegative { ", k>=0" } else { "" }
+        if r.nonnegative { ", k>=0" } else { "" },
+        if r.norm == "spectral" {
+            ", spectral norm"
+        } else {
+            ""
+        }
     )
 }
 

@@ -124,6 +124,7 @@ pub fn write_derivation(
         "mass": d.mass,
         "derived": d.derived,
         "validation": d.derived.validation,
+        "spectrum": d.spectrum,
         "probes": d.probes.iter().zip(&d.probe_nodes).map(|(p, n)| serde_json::json!({"u": p.0, "v": p.1, "node": n})).collect::<Vec<_>>(),
     });
     if let Some(g) = &d.given {
@@ -235,6 +236,26 @@ pub fn write_derivation(
         )
         .map_err(io)?;
     }
+    if !d.spectrum.dnurbs.is_empty() {
+        for ext in ["svg", "png"] {
+            nurbspring_io::plot::plot_spectrum(
+                out.join(format!("spectrum.{ext}")),
+                "Angular frequencies: D-NURBS vs derived MSM (linearized at rest)",
+                "omega [rad/s]",
+                &[
+                    ("D-NURBS", &d.spectrum.dnurbs),
+                    ("derived MSM", &d.spectrum.msm),
+                ],
+            )
+            .map_err(io)?;
+        }
+    }
+    let obj = nurbspring_io::output::ObjMesh::lattice(
+        d.lattice.positions.clone(),
+        d.lattice.springs.iter().map(|s| [s.a, s.b]).collect(),
+    );
+    nurbspring_io::output::write_obj(out.join("lattice.obj"), &obj, "nurbspring derived lattice")
+        .map_err(io)?;
     crate::output::write_lattice_vtu(&out.join("lattice.vtu"), &d.lattice)?;
 
     let md = report_markdown(scene_label, d, paper_table);

@@ -68,14 +68,15 @@ pub fn verdict_table(report: &nurbspring_derive::paper::PaperReport) -> String {
     let _ = writeln!(s, "{}", "-".repeat(78));
     let _ = writeln!(
         s,
-        "Stiffness fit, every reading (net, dofs, constraint: k_edge, k_diag, residual; residual at the paper's k)"
+        "Stiffness fit, every reading (net, dofs, norm, constraint: k_edge, k_diag, relative residual; the same at the paper's k)"
     );
     for f in &report.fits {
         let _ = writeln!(
             s,
-            "  {:<8} {:<4} {:<13} k_edge = {:>10.5}  k_diag = {:>10.5}  residual = {:.4}  (paper's k: {:.4})",
+            "  {:<8} {:<4} {:<9} {:<13} k_edge = {:>10.5}  k_diag = {:>10.5}  residual = {:.4}  (paper's k: {:.4})",
             f.net.name(),
             f.dofs.name(),
+            f.norm,
             if f.nonnegative {
                 "k >= 0"
             } else {
@@ -89,16 +90,17 @@ pub fn verdict_table(report: &nurbspring_derive::paper::PaperReport) -> String {
     }
     let _ = writeln!(
         s,
-        "Side-by-side runs, central node z (net, rest shape, parameters, integrator: dt_crit, rel. RMS, periods D-NURBS/MSM)"
+        "Side-by-side runs, central node z (net, rest shape, parameters, integrator, horizon: dt_crit, rel. RMS, periods D-NURBS/MSM)"
     );
     for d in &report.dynamics {
         let _ = writeln!(
             s,
-            "  {:<8} rest={:<7} {:<7} {:<16} dt_crit = {:.4}  rel.RMS = {:>9.4}  T = {} / {}{}",
+            "  {:<8} rest={:<7} {:<7} {:<16} {:>4} s  dt_crit = {:.4}  rel.RMS = {:>9.4}  T = {} / {}{}",
             d.net.name(),
             d.rest_shape,
             d.parameters,
             d.integrator,
+            d.t_end,
             d.dt_critical,
             d.relative_rms,
             d.dnurbs_period

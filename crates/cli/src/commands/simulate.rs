@@ -200,15 +200,19 @@ fn run_dnurbs(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
     let n_steps = (t_end / dt).ceil() as u64;
     let bar = Progress::new(ctx.global.quiet, "D-NURBS", n_steps);
     let mut pos = vec![0.0; probes.nrows()];
-    let save_every = sim.save_every.max(1);
+    let (save_every, frame_every) = (sim.save_every, sim.vtk_every);
     let mut observe = |step: usize, t: f64, p: &[f64], kinetic: f64, potential: f64| {
+        bar.set(step as u64);
+        if !step.is_multiple_of(save_every) {
+            return;
+        }
         probes.mul_vec(p, &mut pos);
         let mut row = vec![t];
         row.extend_from_slice(&pos);
         rec.rows.push(row);
         rec.energy
             .push(vec![t, kinetic, potential, kinetic + potential]);
-        if step.is_multiple_of(save_every) && rec.frame_error.is_none() {
+        if (rec.rows.len() - 1).is_multiple_of(frame_every) && rec.frame_error.is_none() {
             let name = format!("surface_{:06}.vts", rec.frames.len());
             match crate::output::write_geometry_frame(
                 &out.join(&name),
@@ -220,7 +224,6 @@ fn run_dnurbs(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
                 Err(e) => rec.frame_error = Some(e),
             }
         }
-        bar.set(step as u64);
     };
     let result = if model.matrices().dofs_per_point == 4 {
         convert::run_rational(&model, initial, dt, t_end, &ctx.cancel, &mut observe)
@@ -283,9 +286,13 @@ fn run_msm(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
     let mut opts = RunOptions::new(dt, t_end, integrator);
     opts.cancel = Some(ctx.cancel.clone());
     opts.force_unstable = args.force_unstable;
-    let save_every = setup.save_every.max(1);
+    let (save_every, frame_every) = (setup.save_every, setup.vtk_every);
     let lattice = model.lattice().clone();
     let mut obs = |s: &Sample<'_>| {
+        bar.set(s.step as u64);
+        if !s.step.is_multiple_of(save_every) {
+            return;
+        }
         let x = model.full_positions(s.q);
         let mut row = vec![s.t];
         for &a in &setup.probe_nodes {
@@ -294,14 +301,13 @@ fn run_msm(ctx: &Context, args: &SimulateArgs) -> Result<PathBuf, Failure> {
         rec.rows.push(row);
         rec.energy
             .push(vec![s.t, s.kinetic, s.potential, s.kinetic + s.potential]);
-        if s.step.is_multiple_of(save_every) && rec.frame_error.is_none() {
+        if (rec.rows.len() - 1).is_multiple_of(frame_every) && rec.frame_error.is_none() {
             let name = format!("lattice_{:06}.vtu", rec.frames.len());
             match crate::output::write_lattice_frame(&out.join(&name), &lattice, &x) {
                 Ok(()) => rec.frames.push((s.t, name)),
                 Err(e) => rec.frame_error = Some(e),
             }
         }
-        bar.set(s.step as u64);
     };
     let result = run_outcome(simulate(&model, initial, &opts, &mut obs));
     bar.finish();

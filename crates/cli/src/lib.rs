@@ -1,0 +1,184 @@
+//! # nurbspring (the command-line tool)
+//!
+//! Thin layer: parse flags, load the scene, call the library crates, write the results.
+//! Exit codes: 0 success, 2 bad input (scene, flags), 1 failure during a run. The binary's
+//! `main` is [`main_with_args`]; [`convert`] turns scene sections into model types and is
+//! shared with the fuzz targets.
+
+pub mod commands;
+pub mod convert;
+pub mod output;
+mod progress;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use clap::{Args, Parser, Subcommand};
+
+/// Derive mass-spring models that behave like Dynamic NURBS surfaces.
+#[derive(Parser, Debug)]
+#[command(name = "nurbspring", version, about, long_about = None)]
+pub struct Cli {
+    #[command(flatten)]
+    global: GlobalArgs,
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Flags shared by every command.
+#[derive(Args, Debug, Clone)]
+pub struct GlobalArgs {
+    /// Hide progress bars and informational messages.
+    #[arg(long, short, global = true)]
+    quiet: bool,
+    /// More log output (repeat for more); RUST_LOG also works.
+    #[arg(long, short, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true, value_name = "N")]
+    threads: Option<usize>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run the paper's experiment (built-in scene) and print the reproduction table.
+    Paper(commands::paper::PaperArgs),
+    /// Derive the MSM of a scene and validate it against the D-NURBS.
+    Derive(commands::derive::DeriveArgs),
+    /// Evaluate the scene's surface or curve.
+    Eval(commands::eval::EvalArgs),
+    /// Write the D-NURBS matrices M, D, K and the load f.
+    Matrices(commands::matrices::MatricesArgs),
+    /// Simulate the D-NURBS or the MSM of a scene.
+    Simulate(commands::simulate::SimulateArgs),
+    /// D-NURBS natural frequencies of the constrained system.
+    Modes(commands::modes::ModesArgs),
+    /// Explicit stability limit of the scene's MSM.
+    Stability(commands::stability::StabilityArgs),
+    /// Validate a scene and describe it without running anything.
+    Check(commands::check::CheckArgs),
+}
+
+/// What a command failed with: the exit code and the message.
+#[derive(Debug)]
+pub struct Failure {
+    /// 1 (run failed) or 2 (bad input).
+    pub code: u8,
+    /// The error with its context chain.
+    pub error: anyhow::Error,
+}
+
+impl Failure {
+    /// Bad input: exit code 2.
+    pub fn input(error: impl Into<anyhow::Error>) -> Self {
+        Self {
+            code: 2,
+            error: error.into(),
+        }
+    }
+
+    /// Failure during the run: exit code 1.
+    pub fn run(error: impl Into<anyhow::Error>) -> Self {
+        Self {
+            code: 1,
+            error: error.into(),
+        }
+    }
+}
+
+/// Result of a command.
+pub type CmdResult = Result<(), Failure>;
+
+/// State every command can reach.
+pub struct Context {
+    /// Global flags.
+    pub global: GlobalArgs,
+    /// Set by Ctrl-C.
+    pub cancel: Arc<AtomicBool>,
+}
+
+/// Runs the command line `std::env::args()` and returns the process exit code.
+pub fn main_with_args() -> ExitCode {
+    let cli = Cli::parse();
+    init_logging(&cli.global);
+    if let Some(n) = cli.global.threads {
+        if n == 0 {
+            eprintln!("error: --threads must be at least 1, got 0");
+            return ExitCode::from(2);
+        }
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+        {
+            eprintln!("error: cannot start {n} worker threads: {e}");
+            return ExitCode::from(1);
+        }
+    }
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // A second Ctrl-C while the first is being honoured ends the process at once.
+        let _ = ctrlc::set_handler(move || {
+            if cancel.swap(true, std::sync::atomic::Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
+    let ctx = Context {
+        global: cli.global.clone(),
+        cancel,
+    };
+    let result = match cli.command {
+        Command::Paper(a) => commands::paper::run(&ctx, a),
+        Command::Derive(a) => commands::derive::run(&ctx, a),
+        Command::Eval(a) => commands::eval::run(&ctx, a),
+        Command::Matrices(a) => commands::matrices::run(&ctx, a),
+        Command::Simulate(a) => commands::simulate::run(&ctx, a),
+        Command::Modes(a) => commands::modes::run(&ctx, a),
+        Command::Stability(a) => commands::stability::run(&ctx, a),
+        Command::Check(a) => commands::check::run(&ctx, a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            eprintln!("error: {:#}", f.error);
+            ExitCode::from(f.code)
+        }
+    }
+}
+
+fn init_logging(global: &GlobalArgs) {
+    use tracing_subscriber::EnvFilter;
+    let default = match (global.quiet, global.verbose) {
+        (true, _) => "error",
+        (false, 0) => "warn",
+        (false, 1) => "info",
+        (false, 2) => "debug",
+        _ => "trace",
+    };
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .without_time()
+        .try_init();
+}
+
+/// Resolves an output folder: creates it, refusing a path that exists and is not a folder.
+pub fn prepare_out_dir(dir: &std::path::Path) -> Result<PathBuf, Failure> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Failure::input(anyhow::anyhow!(
+            "--out {}: exists and is not a folder",
+            dir.display()
+        )));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Failure::run(anyhow::anyhow!(
+            "cannot create the output folder {}: {e}",
+            dir.display()
+        ))
+    })?;
+    Ok(dir.to_path_buf())
+}
