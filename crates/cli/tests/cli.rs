@@ -30,7 +30,7 @@ fn scene(dir: &Path, name: &str, text: &str) -> PathBuf {
     p
 }
 
-/// Every example scene passes `check`; surfaces also give a stability limit.
+/// Every example scene passes `check` and `derive`.
 #[test]
 fn every_example_checks() {
     let mut n = 0;
@@ -46,6 +46,29 @@ fn every_example_checks() {
             let v = json_of(&out.get_output().stdout);
             assert!(
                 v["dnurbs"]["free_dofs"].as_u64().unwrap() > 0,
+                "{}",
+                path.display()
+            );
+            // Every example derives an MSM with non-negative constants and a finite error.
+            let dir = tempfile::tempdir().unwrap();
+            bin()
+                .arg("derive")
+                .arg(&path)
+                .arg("--out")
+                .arg(dir.path())
+                .assert()
+                .success();
+            let report: serde_json::Value = serde_json::from_str(
+                &std::fs::read_to_string(dir.path().join("report.json")).unwrap(),
+            )
+            .unwrap();
+            for k in ["k_edge", "k_diag", "k_bend"] {
+                if let Some(x) = report["derived"][k].as_f64() {
+                    assert!(x >= 0.0, "{}: {k} = {x}", path.display());
+                }
+            }
+            assert!(
+                report["validation"]["rms"].as_f64().unwrap().is_finite(),
                 "{}",
                 path.display()
             );

@@ -687,7 +687,22 @@ pub fn derive_msm(
     let free_dofs = setup.solve(FitDofs::Free, false)?;
     let all_dofs_nonnegative = setup.solve(FitDofs::All, true)?;
     let free_dofs_nonnegative = setup.solve(FitDofs::Free, true)?;
-    let selected_closed = match (config.fit.dofs, config.fit.nonnegative) {
+    // A spring cannot have a negative constant: when the unconstrained optimum has one, the
+    // derived MSM uses the k ≥ 0 optimum of the same reading, and the report says so.
+    let unconstrained = match config.fit.dofs {
+        FitDofs::All => &all_dofs,
+        FitDofs::Free => &free_dofs,
+    };
+    let negative: Vec<String> = [
+        ("k_edge", unconstrained.k_edge),
+        ("k_diag", unconstrained.k_diag),
+        ("k_bend", unconstrained.k_bend),
+    ]
+    .into_iter()
+    .filter_map(|(name, k)| k.filter(|&k| k < 0.0).map(|k| format!("{name} = {k:.6}")))
+    .collect();
+    let nonnegative = config.fit.nonnegative || !negative.is_empty();
+    let selected_closed = match (config.fit.dofs, nonnegative) {
         (FitDofs::All, false) => all_dofs.clone(),
         (FitDofs::Free, false) => free_dofs.clone(),
         (FitDofs::All, true) => all_dofs_nonnegative.clone(),
@@ -695,7 +710,7 @@ pub fn derive_msm(
     };
     let fit = setup.fit(config.fit.dofs);
     let start = vec![1.0; fit.kinds().len()];
-    let tr = fit.trust_region(&start, config.fit.nonnegative, 500)?;
+    let tr = fit.trust_region(&start, nonnegative, 500)?;
     let tr_result = FitResult::new(fit.kinds(), &tr.k, fit.relative_residual(&tr.k)?);
     let max_rel = fit
         .kinds()
@@ -721,9 +736,9 @@ pub fn derive_msm(
             max_relative_difference_to_closed_form: max_rel,
         },
         selected_reading: format!(
-            "{} dofs, {}, {}",
+            "{} dofs, {}, {}{}",
             config.fit.dofs.name(),
-            if config.fit.nonnegative {
+            if nonnegative {
                 "k >= 0"
             } else {
                 "unconstrained"
@@ -731,6 +746,14 @@ pub fn derive_msm(
             match config.fit.method {
                 FitMethod::ClosedForm => "closed form",
                 FitMethod::TrustRegion => "trust region",
+            },
+            if config.fit.nonnegative || negative.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " (k >= 0 imposed because the unconstrained fit gives {}, which no spring can have)",
+                    negative.join(", ")
+                )
             }
         ),
         selected: selected.clone(),

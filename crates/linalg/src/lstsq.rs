@@ -5,7 +5,12 @@ use crate::error::mismatch;
 use crate::solvers::norm;
 use crate::{DenseMatrix, LinalgError};
 
-fn check_system(op: &'static str, a: &DenseMatrix, b: &[f64]) -> Result<(), LinalgError> {
+/// Checks that `b` matches the rows of `a` and that both are finite.
+pub(crate) fn check_system(
+    op: &'static str,
+    a: &DenseMatrix,
+    b: &[f64],
+) -> Result<(), LinalgError> {
     if b.len() != a.nrows() {
         return Err(mismatch(
             op,

@@ -249,17 +249,7 @@ pub(crate) fn norm(x: &[f64]) -> f64 {
 
 fn check_rhs(op: &'static str, a: &DenseMatrix, b: &[f64]) -> Result<(), LinalgError> {
     check_square(op, a.nrows(), a.ncols())?;
-    if b.len() != a.nrows() {
-        return Err(mismatch(
-            op,
-            format!("right-hand side of length {}", a.nrows()),
-            b.len(),
-        ));
-    }
-    if !a.data().iter().chain(b).all(|v| v.is_finite()) {
-        return Err(LinalgError::NonFinite { what: op });
-    }
-    Ok(())
+    crate::lstsq::check_system(op, a, b)
 }
 
 /// Solves `A x = b` for a dense symmetric positive-definite A by Cholesky `A = L Lᵀ` (faer,
