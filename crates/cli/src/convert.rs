@@ -146,9 +146,8 @@ pub fn constraints(scene: &Scene) -> Result<Constraints, Failure> {
 /// Which D-NURBS errors are bad input (exit 2) and which are failures of the run (exit 1).
 pub fn dnurbs_failure(e: DnurbsError) -> Failure {
     match e {
-        DnurbsError::Singular { .. } | DnurbsError::Linalg(_) | DnurbsError::NonFinite { .. } => {
-            Failure::run(e)
-        }
+        // A singular system (nothing fixed, no mass) is a property of the scene: bad input.
+        DnurbsError::Linalg(_) | DnurbsError::NonFinite { .. } => Failure::run(e),
         DnurbsError::Sim(ref s)
             if !matches!(
                 s,

@@ -57,6 +57,8 @@ enum Command {
     Modes(commands::modes::ModesArgs),
     /// Explicit stability limit of the scene's MSM.
     Stability(commands::stability::StabilityArgs),
+    /// D-NURBS steady state under the scene's loads (eq. 8).
+    Steady(commands::steady::SteadyArgs),
     /// Validate a scene and describe it without running anything.
     Check(commands::check::CheckArgs),
 }
@@ -138,6 +140,7 @@ pub fn main_with_args() -> ExitCode {
         Command::Simulate(a) => commands::simulate::run(&ctx, a),
         Command::Modes(a) => commands::modes::run(&ctx, a),
         Command::Stability(a) => commands::stability::run(&ctx, a),
+        Command::Steady(a) => commands::steady::run(&ctx, a),
         Command::Check(a) => commands::check::run(&ctx, a),
     };
     match result {

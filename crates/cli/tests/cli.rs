@@ -432,3 +432,30 @@ fn built_in_scene_is_the_example() {
     assert_eq!(ra["fit"], rb["fit"]);
     assert_eq!(ra["mass"], rb["mass"]);
 }
+
+/// `steady`: a clamped sheet sags under gravity; a free-floating one is refused (exit 2).
+#[test]
+fn steady_state_sags_and_free_body_is_refused() {
+    let out = bin()
+        .arg("steady")
+        .arg(examples().join("sheet_gravity.toml"))
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    let dz = v["probes"][0]["displacement"][2].as_f64().unwrap();
+    assert!(dz < 0.0, "{dz}");
+    let free = std::fs::read_to_string(examples().join("sheet_gravity.toml"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with("fixed ="))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let dir = tempfile::tempdir().unwrap();
+    let p = scene(dir.path(), "free.toml", &free);
+    let out = bin().arg("steady").arg(&p).assert().code(2);
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        err.contains("free.toml") && err.to_lowercase().contains("singular"),
+        "{err}"
+    );
+}

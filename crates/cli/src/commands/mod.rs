@@ -8,3 +8,4 @@ pub mod modes;
 pub mod paper;
 pub mod simulate;
 pub mod stability;
+pub mod steady;

@@ -27,7 +27,9 @@ pub fn run(_ctx: &Context, args: ModesArgs) -> CmdResult {
     }
     let scene = convert::load_scene(&args.scene)?;
     let model = convert::dnurbs_model(&scene)?;
-    let modes = model.modes(args.count).map_err(convert::dnurbs_failure)?;
+    let modes = model
+        .modes(args.count)
+        .map_err(|e| convert::dnurbs_failure(e).context(&args.scene))?;
     let periods: Vec<Option<f64>> = modes
         .omega
         .iter()
