@@ -15,7 +15,9 @@
 use std::io::Write;
 
 use nurbspring_geom::{KnotVector, NurbsSurface};
-use nurbspring_msm::{FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringLattice};
+use nurbspring_msm::{
+    Class, Constants, FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringKind, SpringLattice,
+};
 use nurbspring_sim::{IntegratorKind, make_stepper};
 
 fn sheet(n: usize) -> MsmModel {
@@ -27,8 +29,10 @@ fn sheet(n: usize) -> MsmModel {
             nodes_u: n,
             nodes_v: n,
         },
-        k_edge: 1000.0,
-        k_diag: 500.0,
+        springs: Constants::from_pairs([
+            (Class::Spring(SpringKind::Structural), 1000.0),
+            (Class::Spring(SpringKind::Shear), 500.0),
+        ]),
         mass: 1.0 / (n * n) as f64,
         fixed: FixedNodes::List(vec![0, (n - 1) * n]),
         gravity: [0.0, 0.0, -9.81],

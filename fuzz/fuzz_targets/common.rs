@@ -2,9 +2,7 @@
 //! take a few steps of each with every integrator that applies, and set up the stiffness fit.
 //! Errors are expected; panics, hangs and aborts are findings.
 
-use nurbspring::commands::simulate::MsmOverrides;
-use nurbspring::convert;
-use nurbspring_io::scene::Scene;
+use nurbspring_scene::{MsmOverrides, Scene};
 use nurbspring_sim::{IntegratorKind, RunOptions, simulate};
 
 /// Largest problem run through the models (keeps each execution in milliseconds).
@@ -22,36 +20,29 @@ pub fn run_scene_text(text: &str) {
     {
         return;
     }
-    let Ok(model) = convert::dnurbs_model(&scene) else {
+    let Ok(model) = scene.build_dnurbs() else {
         return;
     };
     let dt = scene.simulation.dt;
-    if let Ok(initial) = convert::dnurbs_initial_state(&scene, &model) {
-        for kind in [IntegratorKind::TerzopoulosQin, IntegratorKind::Newmark] {
-            let opts = RunOptions::new(dt, STEPS * dt, kind);
-            let _ = simulate(&model, initial.clone(), &opts, &mut |_: &nurbspring_sim::Sample<'_>| {});
-        }
+    let initial = scene.initial_conditions().state(&model);
+    for kind in [IntegratorKind::TerzopoulosQin, IntegratorKind::Newmark] {
+        let opts = RunOptions::new(dt, STEPS * dt, kind);
+        let _ = model.simulate(initial.clone(), &opts, &mut |_: &nurbspring_sim::Sample<'_>| {});
     }
     let _ = model.steady_state();
     let _ = model.modes(3);
     if !scene.geometry.is_surface() {
         return;
     }
-    if let Ok((msm, initial, _)) = convert::msm_model_from_scene(&scene, &MsmOverrides::default()) {
-        for kind in [
-            IntegratorKind::SymplecticEuler,
-            IntegratorKind::VelocityVerlet,
-            IntegratorKind::Rk4,
-            IntegratorKind::BackwardEuler,
-            IntegratorKind::Newmark,
-        ] {
+    if let Ok(setup) = scene.msm_setup(&MsmOverrides::default()) {
+        for kind in nurbspring_msm::MsmModel::INTEGRATORS {
             let mut opts = RunOptions::new(dt, STEPS * dt, kind);
             opts.force_unstable = true;
-            let _ = simulate(&msm, initial.clone(), &opts, &mut |_: &nurbspring_sim::Sample<'_>| {});
+            let _ = simulate(&setup.model, setup.initial.clone(), &opts, &mut |_: &nurbspring_sim::Sample<'_>| {});
         }
-        let _ = msm.stability();
+        let _ = setup.model.stability();
     }
-    if let Ok(config) = convert::experiment(&scene)
+    if let Ok(config) = scene.derivation_config()
         && let Ok(setup) = nurbspring_derive::Setup::new(&config)
     {
         for dofs in [nurbspring_derive::FitDofs::All, nurbspring_derive::FitDofs::Free] {

@@ -1,21 +1,19 @@
 //! # nurbspring (the command-line tool)
 //!
-//! Thin layer: parse flags, load the scene, call the library crates, write the results.
-//! Exit codes: 0 success, 2 bad input (scene, flags), 1 failure during a run. The binary's
-//! `main` is [`main_with_args`]; [`convert`] turns scene sections into model types and is
-//! shared with the fuzz targets.
+//! Thin layer over `nurbspring-scene`: parse flags, call, print, map errors to exit codes
+//! ([`exit`]). The binary's `main` is [`main_with_args`].
 
 pub mod commands;
-pub mod convert;
-pub mod output;
+pub mod exit;
 mod progress;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use clap::{Args, Parser, Subcommand};
+use nurbspring_scene::Error;
 
 /// Derive mass-spring models that behave like Dynamic NURBS surfaces.
 #[derive(Parser, Debug)]
@@ -63,35 +61,8 @@ enum Command {
     Check(commands::check::CheckArgs),
 }
 
-/// What a command failed with: the exit code and the message.
-#[derive(Debug)]
-pub struct Failure {
-    /// 1 (run failed) or 2 (bad input).
-    pub code: u8,
-    /// The error with its context chain.
-    pub error: anyhow::Error,
-}
-
-impl Failure {
-    /// Bad input: exit code 2.
-    pub fn input(error: impl Into<anyhow::Error>) -> Self {
-        Self {
-            code: 2,
-            error: error.into(),
-        }
-    }
-
-    /// Failure during the run: exit code 1.
-    pub fn run(error: impl Into<anyhow::Error>) -> Self {
-        Self {
-            code: 1,
-            error: error.into(),
-        }
-    }
-}
-
 /// Result of a command.
-pub type CmdResult = Result<(), Failure>;
+pub type CmdResult = Result<(), Error>;
 
 /// State every command can reach.
 pub struct Context {
@@ -101,21 +72,28 @@ pub struct Context {
     pub cancel: Arc<AtomicBool>,
 }
 
+impl Context {
+    /// True unless `--quiet`.
+    pub fn verbose(&self) -> bool {
+        !self.global.quiet
+    }
+}
+
 /// Runs the command line `std::env::args()` and returns the process exit code.
 pub fn main_with_args() -> ExitCode {
     let cli = Cli::parse();
     init_logging(&cli.global);
     if let Some(n) = cli.global.threads {
         if n == 0 {
-            eprintln!("error: --threads must be at least 1, got 0");
-            return ExitCode::from(2);
+            eprintln!("error: --threads 0: must be at least 1");
+            return ExitCode::from(exit::INPUT);
         }
         if let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build_global()
         {
             eprintln!("error: cannot start {n} worker threads: {e}");
-            return ExitCode::from(1);
+            return ExitCode::from(exit::RUN);
         }
     }
     let cancel = Arc::new(AtomicBool::new(false));
@@ -124,7 +102,7 @@ pub fn main_with_args() -> ExitCode {
         // A second Ctrl-C while the first is being honoured ends the process at once.
         let _ = ctrlc::set_handler(move || {
             if cancel.swap(true, std::sync::atomic::Ordering::SeqCst) {
-                std::process::exit(130);
+                std::process::exit(i32::from(exit::CANCELLED));
             }
         });
     }
@@ -145,9 +123,9 @@ pub fn main_with_args() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(f) => {
-            eprintln!("error: {:#}", f.error);
-            ExitCode::from(f.code)
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(exit::code(&e))
         }
     }
 }
@@ -170,18 +148,31 @@ fn init_logging(global: &GlobalArgs) {
 }
 
 /// Resolves an output folder: creates it, refusing a path that exists and is not a folder.
-pub fn prepare_out_dir(dir: &std::path::Path) -> Result<PathBuf, Failure> {
+pub fn prepare_out_dir(dir: &Path) -> Result<PathBuf, Error> {
     if dir.exists() && !dir.is_dir() {
-        return Err(Failure::input(anyhow::anyhow!(
-            "--out {}: exists and is not a folder",
-            dir.display()
-        )));
+        return Err(Error::option(
+            "--out",
+            dir.display(),
+            "exists and is not a folder",
+        ));
     }
     std::fs::create_dir_all(dir).map_err(|e| {
-        Failure::run(anyhow::anyhow!(
-            "cannot create the output folder {}: {e}",
-            dir.display()
-        ))
+        Error::Output(nurbspring_io::OutputError::Io {
+            path: dir.to_path_buf(),
+            source: e,
+        })
     })?;
     Ok(dir.to_path_buf())
+}
+
+/// Pretty JSON of a value, for commands that print JSON on stdout.
+pub fn print_json(value: &impl serde::Serialize) -> CmdResult {
+    let text = serde_json::to_string_pretty(value).map_err(|e| {
+        Error::Output(nurbspring_io::OutputError::Json {
+            path: PathBuf::from("<stdout>"),
+            source: e,
+        })
+    })?;
+    println!("{text}");
+    Ok(())
 }

@@ -41,6 +41,12 @@ impl Progress {
         self.bar.set_length(total);
     }
 
+    /// Sets the position and the total.
+    pub fn update(&self, done: usize, total: usize) {
+        self.set_total(total as u64);
+        self.set(done as u64);
+    }
+
     /// Removes the bar.
     pub fn finish(&self) {
         self.bar.finish_and_clear();

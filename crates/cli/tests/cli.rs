@@ -227,9 +227,9 @@ fn simulate_msm_explicit_above_limit_is_refused_then_forced() {
         ])
         .arg(dir.path())
         .assert()
-        .code(1);
+        .code(2);
     let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
-    assert!(err.contains("--force-unstable"), "{err}");
+    assert!(err.contains("--dt") && err.contains("unstable"), "{err}");
     let out = bin()
         .arg("simulate")
         .arg(paper())

@@ -4,43 +4,23 @@ use nurbspring_dnurbs::DnurbsError;
 use nurbspring_geom::GeomError;
 use nurbspring_linalg::LinalgError;
 use nurbspring_msm::MsmError;
-use nurbspring_sim::SimError;
+use nurbspring_sim::{ErrorKind, SimError};
 
 /// Everything that can stop a derivation; messages carry the offending values.
 #[derive(Debug, thiserror::Error)]
 pub enum DeriveError {
-    /// A lattice node whose parameters lie outside the surface's domain.
-    #[error(
-        "lattice node {node} has parameters ({u}, {v}) outside the surface domain [{u0}, {u1}] × [{v0}, {v1}]"
-    )]
-    NodeOutsideDomain {
-        /// Node index.
-        node: usize,
-        /// Its u.
-        u: f64,
-        /// Its v.
-        v: f64,
-        /// Domain start in u.
-        u0: f64,
-        /// Domain end in u.
-        u1: f64,
-        /// Domain start in v.
-        v0: f64,
-        /// Domain end in v.
-        v1: f64,
-    },
     /// The lattice carries no parameters (it was not sampled from a surface).
     #[error(
         "the lattice has no (u, v) parameters per node: Ω needs a lattice sampled from the surface"
     )]
     LatticeWithoutParameters,
-    /// Fewer springs than spring classes to fit, or no class at all.
-    #[error("cannot fit {classes} spring classes with {springs} springs")]
-    TooFewSprings {
+    /// Fewer elements than classes to fit, or no class at all.
+    #[error("cannot fit {classes} element classes with {elements} elements")]
+    TooFewElements {
         /// Number of classes.
         classes: usize,
-        /// Number of springs.
-        springs: usize,
+        /// Number of elements.
+        elements: usize,
     },
     /// The normal equations of the fit are singular.
     #[error("the stiffness fit is singular: {detail}")]
@@ -48,7 +28,7 @@ pub enum DeriveError {
         /// Which classes cannot be told apart.
         detail: String,
     },
-    /// Mismatched sizes between the D-NURBS and the lattice.
+    /// Mismatched sizes between the D-NURBS and the lattice (a caller's bug).
     #[error("size mismatch in {what}: expected {expected}, found {found}")]
     DimensionMismatch {
         /// What was compared.
@@ -58,13 +38,25 @@ pub enum DeriveError {
         /// Found size.
         found: usize,
     },
-    /// An option with an invalid value.
-    #[error("invalid {name}: {value}")]
+    /// A derivation option with an invalid value; `name` is the option.
+    #[error("{name} = {value}: {reason}")]
     InvalidOption {
         /// Option name.
         name: &'static str,
         /// Its value as text.
         value: String,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// Every mass candidate of the scan failed to run.
+    #[error(
+        "every mass candidate failed to run ({tried} tried; the first: {first}); give a mass with fit.mass = \"fixed\" and msm.mass"
+    )]
+    NoMassCandidate {
+        /// Candidates tried.
+        tried: usize,
+        /// Why the first one stopped.
+        first: String,
     },
     /// The run was cancelled (Ctrl-C).
     #[error("cancelled")]
@@ -87,27 +79,22 @@ pub enum DeriveError {
 }
 
 impl DeriveError {
-    /// True when the error comes from the input (scene, options) rather than from the run.
-    pub fn is_input_error(&self) -> bool {
+    /// Input: the lattice, the options, a fit the input leaves singular, the geometry. Run:
+    /// failed candidates, linear algebra, size mismatches. Wrapped errors keep their kind.
+    pub fn kind(&self) -> ErrorKind {
         match self {
-            DeriveError::NodeOutsideDomain { .. }
-            | DeriveError::LatticeWithoutParameters
-            | DeriveError::TooFewSprings { .. }
-            | DeriveError::DimensionMismatch { .. }
+            DeriveError::LatticeWithoutParameters
+            | DeriveError::TooFewElements { .. }
+            | DeriveError::SingularFit { .. }
             | DeriveError::InvalidOption { .. }
-            | DeriveError::Geom(_) => true,
-            DeriveError::Dnurbs(e) => !matches!(
-                e,
-                DnurbsError::Singular { .. } | DnurbsError::Sim(_) | DnurbsError::Linalg(_)
-            ),
-            DeriveError::Msm(e) => !matches!(e, MsmError::Sim(_) | MsmError::Linalg(_)),
-            DeriveError::Sim(e) => matches!(
-                e,
-                SimError::InvalidTimeStep { .. }
-                    | SimError::InvalidDuration { .. }
-                    | SimError::Unstable { .. }
-            ),
-            _ => false,
+            | DeriveError::Geom(_) => ErrorKind::Input,
+            DeriveError::DimensionMismatch { .. }
+            | DeriveError::NoMassCandidate { .. }
+            | DeriveError::Linalg(_) => ErrorKind::Run,
+            DeriveError::Cancelled => ErrorKind::Cancelled,
+            DeriveError::Sim(e) => e.kind(),
+            DeriveError::Dnurbs(e) => e.kind(),
+            DeriveError::Msm(e) => e.kind(),
         }
     }
 }

@@ -1,22 +1,23 @@
 //! The stiffness fit of the paper's eq. (15): `min_k ‖Ωᵀ K_S(k) Ω − K_D‖_F²`.
 //!
-//! `K_S` is linear in the spring constants, `K_S = Σ_c k_c G_c` (SPEC §5), so with
+//! `K_S` is linear in the class constants, `K_S = Σ_c k_c G_c` (docs/math.md §5), so with
 //! `H_c = Ωᵀ G_c Ω` the problem is linear least squares in `k`: the normal equations
-//! `A k = b` with `A_cd = ⟨H_c, H_d⟩_F` and `b_c = ⟨H_c, K_D⟩_F` (SPEC §6). The products are
+//! `A k = b` with `A_cd = ⟨H_c, H_d⟩_F` and `b_c = ⟨H_c, K_D⟩_F` (docs/math.md §6). The products are
 //! formed sparse (never a dense `3N × 3N` product). The paper solved (15) with a trust-region
 //! method; [`StiffnessFit::trust_region`] does the same and must land on the closed form.
 
-use nurbspring_linalg::{DenseMatrix, SparseMatrix, symmetric_eigen};
-use nurbspring_msm::SpringKind;
-use serde::Serialize;
+use nurbspring_linalg::{DenseMatrix, SparseMatrix, nonnegative_least_squares, symmetric_eigen};
+use nurbspring_msm::{Class, Constants};
+use serde::{Deserialize, Serialize};
 
 use crate::DeriveError;
 
 /// Which rows and columns of `K_D` (and of `Ωᵀ K_S Ω`) enter the fit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FitDofs {
     /// Every generalized coordinate: the paper's literal eq. (15).
+    #[default]
     All,
     /// Only the free (unconstrained) generalized coordinates.
     Free,
@@ -32,10 +33,20 @@ impl FitDofs {
     }
 }
 
+/// Constants by class with the residual of eq. (15) they leave.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct FitResult {
+    /// The constants (`k_edge`, `k_diag`, `k_bend` in files).
+    #[serde(flatten)]
+    pub constants: Constants,
+    /// `‖Ωᵀ K_S Ω − K_D‖_F / ‖K_D‖_F` on the dofs of this fit.
+    pub relative_residual: f64,
+}
+
 /// The fit problem: the matrices `H_c`, the target `K_D` and the normal equations.
 #[derive(Clone, Debug)]
 pub struct StiffnessFit {
-    kinds: Vec<SpringKind>,
+    classes: Vec<Class>,
     h: Vec<SparseMatrix>,
     k_d: SparseMatrix,
     gram: DenseMatrix,
@@ -55,20 +66,20 @@ pub struct TrustRegionOutcome {
 }
 
 impl StiffnessFit {
-    /// Sets up the fit. `unit` holds `(class, G_c)` for every spring class present (3N_nodes
+    /// Sets up the fit. `unit` holds `(class, G_c)` for every class present (3N_nodes
     /// square); `omega` is Ω (3N_nodes × n); `k_d` is n × n; `dofs` selects the generalized
     /// coordinates that enter (None = all).
     pub fn new(
         k_d: &SparseMatrix,
         omega: &SparseMatrix,
-        unit: &[(SpringKind, SparseMatrix)],
-        n_springs: usize,
+        unit: &[(Class, SparseMatrix)],
+        n_elements: usize,
         dofs: Option<&[usize]>,
     ) -> Result<Self, DeriveError> {
-        if unit.is_empty() || n_springs < unit.len() {
-            return Err(DeriveError::TooFewSprings {
+        if unit.is_empty() || n_elements < unit.len() {
+            return Err(DeriveError::TooFewElements {
                 classes: unit.len(),
-                springs: n_springs,
+                elements: n_elements,
             });
         }
         if k_d.nrows() != omega.ncols() || k_d.ncols() != omega.ncols() {
@@ -90,9 +101,9 @@ impl StiffnessFit {
             None => k_d.clone(),
         };
         let omega_t = omega_sel.transpose();
-        let mut kinds = Vec::with_capacity(unit.len());
+        let mut classes = Vec::with_capacity(unit.len());
         let mut h = Vec::with_capacity(unit.len());
-        for (kind, g) in unit {
+        for (class, g) in unit {
             if g.nrows() != omega.nrows() {
                 return Err(DeriveError::DimensionMismatch {
                     what: "G_c against the rows of Ω",
@@ -101,15 +112,15 @@ impl StiffnessFit {
                 });
             }
             let hc = omega_t.matmul(&g.matmul(&omega_sel)?)?;
-            kinds.push(*kind);
+            classes.push(*class);
             h.push(hc);
         }
-        let c = kinds.len();
+        let c = classes.len();
         let gram = DenseMatrix::from_fn(c, c, |i, j| h[i].frobenius_dot(&h[j]));
         let rhs: Vec<f64> = h.iter().map(|hc| hc.frobenius_dot(&k_d)).collect();
         let k_d_norm = k_d.frobenius_norm();
         let fit = Self {
-            kinds,
+            classes,
             h,
             k_d,
             gram,
@@ -121,15 +132,15 @@ impl StiffnessFit {
     }
 
     fn check_identifiable(&self) -> Result<(), DeriveError> {
-        let c = self.kinds.len();
+        let c = self.classes.len();
         let norms: Vec<f64> = (0..c).map(|i| self.gram[(i, i)].sqrt()).collect();
         let scale = norms.iter().cloned().fold(0.0, f64::max);
         let mut problems = Vec::new();
         for i in 0..c {
             if norms[i] <= 1e-12 * scale.max(f64::MIN_POSITIVE) {
                 problems.push(format!(
-                    "{} springs contribute nothing on the selected dofs (Ωᵀ G Ω = 0)",
-                    self.kinds[i].name()
+                    "{} elements contribute nothing on the selected dofs (Ωᵀ G Ω = 0)",
+                    self.classes[i].name()
                 ));
             }
         }
@@ -142,7 +153,7 @@ impl StiffnessFit {
                 let v = eig.vectors.column(0);
                 let involved: Vec<&str> = (0..c)
                     .filter(|&i| v[i].abs() > 1e-3)
-                    .map(|i| self.kinds[i].name())
+                    .map(|i| self.classes[i].name())
                     .collect();
                 problems.push(format!(
                     "the classes {} give linearly dependent stiffness on the selected dofs (smallest normalized Gram eigenvalue {:.3e})",
@@ -160,9 +171,14 @@ impl StiffnessFit {
         }
     }
 
-    /// The spring classes, in the order of `k`.
-    pub fn kinds(&self) -> &[SpringKind] {
-        &self.kinds
+    /// The classes, in the order of `k`.
+    pub fn classes(&self) -> &[Class] {
+        &self.classes
+    }
+
+    /// `k` in class order as [`Constants`].
+    pub fn constants(&self, k: &[f64]) -> Constants {
+        Constants::from_values(&self.classes, k)
     }
 
     /// The Gram matrix `A_cd = ⟨H_c, H_d⟩_F`.
@@ -201,34 +217,35 @@ impl StiffnessFit {
         Ok(diff.frobenius_norm() / self.k_d_norm.max(f64::MIN_POSITIVE))
     }
 
-    /// Closed-form solution of the normal equations (SPEC §6); with `nonnegative`, the exact
-    /// solution of the convex quadratic program over `k ≥ 0` by enumerating active sets (the
-    /// number of classes is small) and keeping the KKT point.
+    /// Closed-form solution of the normal equations (docs/math.md §6); with `nonnegative`, the exact
+    /// solution of the convex quadratic program over `k ≥ 0`: Lawson–Hanson NNLS
+    /// ([`nonnegative_least_squares`]) on the square-root form `min ‖R k − R⁻ᵀ b‖` of the
+    /// normal equations (`A = RᵀR` from the eigen-decomposition of the Gram matrix) finds the
+    /// active set, and the normal equations restricted to its free classes give the solution.
     pub fn solve(&self, nonnegative: bool) -> Result<Vec<f64>, DeriveError> {
-        let c = self.kinds.len();
+        let c = self.classes.len();
+        let all: Vec<usize> = (0..c).collect();
         if !nonnegative {
-            return self.solve_subset(&(0..c).collect::<Vec<_>>());
+            return self.solve_subset(&all);
         }
-        let mut best: Option<(f64, Vec<f64>)> = None;
-        for mask in 0u32..(1 << c) {
-            let subset: Vec<usize> = (0..c).filter(|i| mask & (1 << i) != 0).collect();
-            let k = if subset.is_empty() {
-                vec![0.0; c]
-            } else {
-                match self.solve_subset(&subset) {
-                    Ok(k) => k,
-                    Err(_) => continue,
-                }
-            };
-            if k.iter().any(|&x| x < 0.0) {
-                continue;
-            }
-            let obj = self.objective(&k);
-            if best.as_ref().is_none_or(|(b, _)| obj < *b) {
-                best = Some((obj, k));
-            }
+        let eig = symmetric_eigen(&self.gram)?;
+        let root: Vec<f64> = eig.values.iter().map(|&l| l.max(0.0).sqrt()).collect();
+        let r = DenseMatrix::from_fn(c, c, |i, j| root[i] * eig.vectors[(j, i)]);
+        let d: Vec<f64> = (0..c)
+            .map(|i| {
+                let vb: f64 = (0..c).map(|j| eig.vectors[(j, i)] * self.rhs[j]).sum();
+                if root[i] > 0.0 { vb / root[i] } else { 0.0 }
+            })
+            .collect();
+        let x = nonnegative_least_squares(&r, &d)?;
+        let passive: Vec<usize> = all.into_iter().filter(|&j| x[j] > 0.0).collect();
+        if passive.is_empty() {
+            return Ok(vec![0.0; c]);
         }
-        Ok(best.map(|(_, k)| k).unwrap_or_else(|| vec![0.0; c]))
+        match self.solve_subset(&passive) {
+            Ok(k) if k.iter().all(|&v| v >= 0.0) => Ok(k),
+            _ => Ok(x),
+        }
     }
 
     fn solve_subset(&self, subset: &[usize]) -> Result<Vec<f64>, DeriveError> {
@@ -236,7 +253,7 @@ impl StiffnessFit {
         let a = DenseMatrix::from_fn(n, n, |i, j| self.gram[(subset[i], subset[j])]);
         let b: Vec<f64> = subset.iter().map(|&i| self.rhs[i]).collect();
         let ks = nurbspring_linalg::cholesky_solve_dense(&a, &b)?;
-        let mut k = vec![0.0; self.kinds.len()];
+        let mut k = vec![0.0; self.classes.len()];
         for (i, &s) in subset.iter().enumerate() {
             k[s] = ks[i];
         }
@@ -268,7 +285,7 @@ impl StiffnessFit {
         nonnegative: bool,
         max_iterations: usize,
     ) -> Result<TrustRegionOutcome, DeriveError> {
-        let c = self.kinds.len();
+        let c = self.classes.len();
         let scale = 2.0 / (self.k_d_norm * self.k_d_norm).max(f64::MIN_POSITIVE);
         let mut k: Vec<f64> = start.to_vec();
         if nonnegative {

@@ -11,13 +11,17 @@ pub const MAX_DENSE_EIGEN: usize = 4000;
 /// The distinct non-null eigenvalues of the symmetric matrix `m`, ascending.
 ///
 /// Eigenvalues with `|λ| ≤ 1e-12 · max|λ|` are null (they occur only when weights are
-/// unknowns, SPEC §7); values within a relative `1e-9` of each other are one (M = S ⊗ I₃
+/// unknowns, docs/math.md §7); values within a relative `1e-9` of each other are one (M = S ⊗ I₃
 /// repeats every eigenvalue of S three times).
 pub fn mass_eigenvalues(m: &SparseMatrix) -> Result<Vec<f64>, DeriveError> {
     if m.nrows() > MAX_DENSE_EIGEN {
         return Err(DeriveError::InvalidOption {
-            name: "mass matrix size for the eigenvalue scan",
-            value: format!("{} rows (at most {MAX_DENSE_EIGEN})", m.nrows()),
+            name: "fit.mass",
+            value: "\"eigenvalue-scan\"".to_string(),
+            reason: format!(
+                "the mass matrix has {} rows, more than the {MAX_DENSE_EIGEN} of a dense eigenvalue scan",
+                m.nrows()
+            ),
         });
     }
     let dense: DenseMatrix = m.to_dense();

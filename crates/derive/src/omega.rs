@@ -1,71 +1,96 @@
-//! The map Ω from generalized coordinates to lattice node positions (paper eqs. 11, 14, 18).
+//! Ω, the map from generalized coordinates to lattice node positions (paper eqs. (11), (14),
+//! (18); docs/math.md §6). Everything that needs node positions, velocities or probe points
+//! from control points goes through [`Omega`].
 
-use nurbspring_geom::NurbsSurface;
+use nurbspring_dnurbs::{DnurbsModel, Geometry};
 use nurbspring_linalg::SparseMatrix;
+use nurbspring_sim::State;
 
 use crate::DeriveError;
 
-/// Ω (paper eq. 14): the rows of `J(u_a, v_a)` stacked for every node `a`, a sparse
-/// `3 N_nodes × d N_cp` matrix with `d` = 3 (constant weights) or 4 (weights as unknowns).
-/// `Ω p(0) = x(0)` (eq. 11) and `ẋ(0) = Ω ṗ(0)` (eq. 18). Node `a` has rows `3a..3a+3`.
+/// Ω (paper eq. (14)): the Jacobians `J(u_a, v_a)` stacked for every point `a`, a sparse
+/// `3 N_points × d N_cp` matrix (`d` = 3, or 4 with weights as unknowns). Point `a` has rows
+/// `3a .. 3a + 3`; `Ω p(0) = x(0)` (eq. 11) and `ẋ(0) = Ω ṗ(0)` (eq. 18).
 ///
 /// ```
+/// use nurbspring_dnurbs::Geometry;
 /// use nurbspring_geom::{KnotVector, NurbsSurface};
-/// use nurbspring_derive::omega_matrix;
+/// use nurbspring_derive::Omega;
 /// let k = KnotVector::try_new(vec![0., 0., 0., 1., 1., 1.], 2).unwrap();
 /// let pts: Vec<[f64; 3]> = (0..9).map(|i| [(i / 3) as f64, (i % 3) as f64, 0.0]).collect();
 /// let s = NurbsSurface::try_new(k.clone(), k, pts.clone(), vec![1.0; 9]).unwrap();
-/// let omega = omega_matrix(&s, &[(0.5, 0.5), (0.0, 1.0)], false).unwrap();
+/// let omega = Omega::new(&Geometry::Surface(s), &[(0.5, 0.5), (0.0, 1.0)], false).unwrap();
 /// let p: Vec<f64> = pts.iter().flatten().copied().collect();
-/// let mut x = vec![0.0; 6];
-/// omega.mul_vec(&p, &mut x);
-/// assert!((x[0] - 1.0).abs() < 1e-15 && (x[1] - 1.0).abs() < 1e-15);
-/// assert!((x[3] - 0.0).abs() < 1e-15 && (x[4] - 2.0).abs() < 1e-15);
+/// let x = omega.apply(&p);
+/// assert!((x[0][0] - 1.0).abs() < 1e-15 && (x[0][1] - 1.0).abs() < 1e-15);
+/// assert!((x[1][0] - 0.0).abs() < 1e-15 && (x[1][1] - 2.0).abs() < 1e-15);
 /// ```
-pub fn omega_matrix(
-    surface: &NurbsSurface,
-    params: &[(f64, f64)],
-    weights_as_dofs: bool,
-) -> Result<SparseMatrix, DeriveError> {
-    let ((u0, u1), (v0, v1)) = surface.domain();
-    for (node, &(u, v)) in params.iter().enumerate() {
-        if surface.check_parameters(u, v).is_err() {
-            return Err(DeriveError::NodeOutsideDomain {
-                node,
-                u,
-                v,
-                u0,
-                u1,
-                v0,
-                v1,
-            });
+#[derive(Clone, Debug)]
+pub struct Omega {
+    matrix: SparseMatrix,
+}
+
+impl Omega {
+    /// Ω of the points at parameters `params` (`v` ignored on a curve).
+    pub fn new(
+        geometry: &Geometry,
+        params: &[(f64, f64)],
+        weights_as_dofs: bool,
+    ) -> Result<Self, DeriveError> {
+        Ok(Self {
+            matrix: geometry.stacked_jacobian(params, weights_as_dofs)?,
+        })
+    }
+
+    /// The matrix.
+    pub fn matrix(&self) -> &SparseMatrix {
+        &self.matrix
+    }
+
+    /// Number of points.
+    pub fn n_points(&self) -> usize {
+        self.matrix.nrows() / 3
+    }
+
+    /// `Ω y` per point: positions from `p` (eq. 11), velocities from `ṗ` (eq. 18),
+    /// displacements from `Δp`.
+    pub fn apply(&self, y: &[f64]) -> Vec<[f64; 3]> {
+        let mut out = vec![0.0; self.matrix.nrows()];
+        self.apply_into(y, &mut out);
+        out.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
+    }
+
+    /// `Ω y` into a flat buffer of `3 N_points` values.
+    pub fn apply_into(&self, y: &[f64], out: &mut [f64]) {
+        self.matrix.mul_vec(y, out);
+    }
+}
+
+/// The initial state of the lattice nodes mapped from a D-NURBS state.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeState {
+    /// `ẋ(0) = Ω ṗ(0)` (paper eq. (18)), one per node.
+    pub velocities: Vec<[f64; 3]>,
+    /// `Ω (p(0) − p_initial)`: how far the D-NURBS initial state moves the nodes from their
+    /// rest positions `Ω p_initial` (paper eq. (11)); empty when it does not move them.
+    pub displacements: Vec<[f64; 3]>,
+}
+
+impl Omega {
+    /// The nodes' initial state for the D-NURBS state `initial` of `model` (reduced
+    /// coordinates): the one place paper eqs. (11) and (18) are applied.
+    pub fn node_state(&self, model: &DnurbsModel, initial: &State) -> NodeState {
+        let velocities = self.apply(&model.full_velocity(&initial.v));
+        let p = model.full_coordinates(&initial.q);
+        let dp: Vec<f64> = p.iter().zip(model.p0()).map(|(a, b)| a - b).collect();
+        let displacements = if dp.iter().all(|&d| d == 0.0) {
+            Vec::new()
+        } else {
+            self.apply(&dp)
+        };
+        NodeState {
+            velocities,
+            displacements,
         }
     }
-    let d = if weights_as_dofs { 4 } else { 3 };
-    let mut triplets = Vec::new();
-    for (node, &(u, v)) in params.iter().enumerate() {
-        let j = surface.jacobian(u, v, 0, weights_as_dofs)?;
-        for l in 0..j.n_local() {
-            let k = j.indices[l];
-            let r = j.r[l][0];
-            if r != 0.0 {
-                for x in 0..3 {
-                    triplets.push((3 * node + x, d * k + x, r));
-                }
-            }
-            if weights_as_dofs {
-                let col = j.weight_columns[l][0];
-                for x in 0..3 {
-                    if col[x] != 0.0 {
-                        triplets.push((3 * node + x, d * k + 3, col[x]));
-                    }
-                }
-            }
-        }
-    }
-    Ok(SparseMatrix::from_triplets(
-        3 * params.len(),
-        d * surface.n_control_points(),
-        &triplets,
-    )?)
 }

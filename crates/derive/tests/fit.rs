@@ -1,11 +1,12 @@
 //! The stiffness fit on problems whose answer is known.
 
-use nurbspring_derive::{DeriveError, StiffnessFit, omega_matrix};
+use nurbspring_derive::{DeriveError, Omega, StiffnessFit};
+use nurbspring_dnurbs::Geometry;
 use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_linalg::SparseMatrix;
-use nurbspring_msm::{LatticeOptions, ParameterGrid, SpringKind, SpringLattice};
+use nurbspring_msm::{Class, Constants, LatticeOptions, ParameterGrid, SpringKind, SpringLattice};
 
-/// The paper's surface (SPEC §7), slightly curved so that every class has out-of-plane terms.
+/// The paper's surface (docs/math.md §7), slightly curved so that every class has out-of-plane terms.
 fn surface(curved: bool) -> NurbsSurface {
     let ku = KnotVector::try_new(vec![0., 0., 0., 0., 0.25, 0.5, 0.75, 1., 1., 1., 1.], 3).unwrap();
     let kv = KnotVector::try_new(vec![0., 0., 0., 0., 0.5, 1., 1., 1., 1.], 3).unwrap();
@@ -28,22 +29,30 @@ fn surface(curved: bool) -> NurbsSurface {
 fn lattice(s: &NurbsSurface, bending: bool, k: [f64; 3], grid: ParameterGrid) -> SpringLattice {
     let options = LatticeOptions {
         grid,
-        structural: true,
-        shear: true,
-        bending,
-        k_edge: k[0],
-        k_diag: k[1],
-        k_bend: k[2],
+        springs: Constants::from_pairs(
+            [
+                (SpringKind::Structural, k[0]),
+                (SpringKind::Shear, k[1]),
+                (SpringKind::Bend, k[2]),
+            ]
+            .into_iter()
+            .filter(|&(kind, _)| bending || kind != SpringKind::Bend)
+            .map(|(kind, k)| (Class::Spring(kind), k)),
+        ),
         ..LatticeOptions::default()
     };
     SpringLattice::from_surface(s, &options, &[]).unwrap()
 }
 
-fn setup(lat: &SpringLattice, s: &NurbsSurface) -> (SparseMatrix, Vec<(SpringKind, SparseMatrix)>) {
-    let omega = omega_matrix(s, lat.params.as_ref().unwrap(), false).unwrap();
+fn setup(lat: &SpringLattice, s: &NurbsSurface) -> (SparseMatrix, Vec<(Class, SparseMatrix)>) {
+    let geometry = Geometry::Surface(s.clone());
+    let omega = Omega::new(&geometry, lat.params.as_ref().unwrap(), false)
+        .unwrap()
+        .matrix()
+        .clone();
     let x0 = lat.flat_positions();
     let unit = lat
-        .kinds_present()
+        .classes()
         .into_iter()
         .map(|c| (c, lat.unit_stiffness(c, &x0)))
         .collect();
@@ -81,11 +90,11 @@ fn recovers_known_constants() {
         let k_d = synthetic_k_d(&lat, &omega);
         let fit = StiffnessFit::new(&k_d, &omega, &unit, lat.springs.len(), None).unwrap();
         let k = fit.solve(false).unwrap();
-        for (i, c) in fit.kinds().iter().enumerate() {
+        for (i, c) in fit.classes().iter().enumerate() {
             let expected = match c {
-                SpringKind::Structural => truth[0],
-                SpringKind::Shear => truth[1],
-                SpringKind::Bend => truth[2],
+                Class::Spring(SpringKind::Structural) => truth[0],
+                Class::Spring(SpringKind::Shear) => truth[1],
+                Class::Spring(SpringKind::Bend) => truth[2],
             };
             assert!(
                 (k[i] - expected).abs() < 1e-11 * expected,
@@ -166,7 +175,10 @@ fn dependent_classes_are_named() {
     let err = StiffnessFit::new(
         &k_d,
         &omega,
-        &[(SpringKind::Structural, g), (SpringKind::Shear, g2)],
+        &[
+            (Class::Spring(SpringKind::Structural), g),
+            (Class::Spring(SpringKind::Shear), g2),
+        ],
         10,
         None,
     )
@@ -181,7 +193,14 @@ fn dependent_classes_are_named() {
         other => panic!("unexpected {other}"),
     }
     let zero = SparseMatrix::zeros(3, 3);
-    let err = StiffnessFit::new(&k_d, &omega, &[(SpringKind::Bend, zero)], 10, None).unwrap_err();
+    let err = StiffnessFit::new(
+        &k_d,
+        &omega,
+        &[(Class::Spring(SpringKind::Bend), zero)],
+        10,
+        None,
+    )
+    .unwrap_err();
     assert!(err.to_string().contains("bend"), "{err}");
 }
 
@@ -192,8 +211,8 @@ fn too_few_springs_is_an_error() {
         &g,
         &g,
         &[
-            (SpringKind::Structural, g.clone()),
-            (SpringKind::Shear, g.clone()),
+            (Class::Spring(SpringKind::Structural), g.clone()),
+            (Class::Spring(SpringKind::Shear), g.clone()),
         ],
         1,
         None,
@@ -201,9 +220,9 @@ fn too_few_springs_is_an_error() {
     .unwrap_err();
     assert!(matches!(
         err,
-        DeriveError::TooFewSprings {
+        DeriveError::TooFewElements {
             classes: 2,
-            springs: 1
+            elements: 1
         }
     ));
 }
@@ -211,11 +230,8 @@ fn too_few_springs_is_an_error() {
 #[test]
 fn node_outside_domain_is_an_error() {
     let s = surface(false);
-    let err = omega_matrix(&s, &[(0.5, 0.5), (1.5, 0.2)], false).unwrap_err();
-    assert!(
-        matches!(err, DeriveError::NodeOutsideDomain { node: 1, .. }),
-        "{err}"
-    );
+    let err = Omega::new(&Geometry::Surface(s), &[(0.5, 0.5), (1.5, 0.2)], false).unwrap_err();
+    assert!(err.to_string().contains("1.5"), "{err}");
 }
 
 /// Ω p(0) = x(0) (eq. 11) on the lattice nodes.
@@ -223,7 +239,14 @@ fn node_outside_domain_is_an_error() {
 fn omega_maps_control_points_to_nodes() {
     let s = surface(true);
     let lat = lattice(&s, false, [1.0, 1.0, 0.0], ParameterGrid::Greville);
-    let omega = omega_matrix(&s, lat.params.as_ref().unwrap(), false).unwrap();
+    let omega = Omega::new(
+        &Geometry::Surface(s.clone()),
+        lat.params.as_ref().unwrap(),
+        false,
+    )
+    .unwrap()
+    .matrix()
+    .clone();
     let p: Vec<f64> = s.control_points().iter().flatten().copied().collect();
     let mut x = vec![0.0; omega.nrows()];
     omega.mul_vec(&p, &mut x);

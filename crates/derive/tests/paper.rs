@@ -1,14 +1,15 @@
-//! The paper's experiment built in code (SPEC §7): invariants of the derivation that hold
+//! The paper's experiment built in code (docs/math.md §7): invariants of the derivation that hold
 //! whatever the paper's numbers turn out to be.
 
-use nurbspring_derive::paper::{PAPER_K_DIAG, PAPER_K_EDGE, greville_net, reproduce};
-use nurbspring_derive::{ExperimentConfig, FitOptions, FitResult, derive_msm};
+use nurbspring_derive::paper::paper_constants;
+use nurbspring_derive::paper::{greville_net, reproduce};
+use nurbspring_derive::{Config, FitOptions, InitialConditions, TimeSettings, derive_msm};
 use nurbspring_dnurbs::{Constraints, DnurbsOptions, Loads, Material};
 use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_msm::LatticeOptions;
 use nurbspring_sim::IntegratorKind;
 
-fn paper_config() -> ExperimentConfig {
+fn paper_config() -> Config {
     let ku = KnotVector::try_new(vec![0., 0., 0., 0., 0.25, 0.5, 0.75, 1., 1., 1., 1.], 3).unwrap();
     let kv = KnotVector::try_new(vec![0., 0., 0., 0., 0.5, 1., 1., 1., 1.], 3).unwrap();
     let px = [0., 0.25, 0.75, 1.52, 2.5, 2.75, 3.];
@@ -18,7 +19,7 @@ fn paper_config() -> ExperimentConfig {
         .flat_map(|&x| py.iter().map(move |&y| [x, y, 2.0]))
         .collect();
     let surface = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 35]).unwrap();
-    ExperimentConfig {
+    Config {
         surface,
         material: Material {
             mu: 25.0,
@@ -33,27 +34,23 @@ fn paper_config() -> ExperimentConfig {
         },
         dnurbs: DnurbsOptions::default(),
         lattice: LatticeOptions {
-            k_edge: PAPER_K_EDGE,
-            k_diag: PAPER_K_DIAG,
+            springs: paper_constants(),
             mass: 0.005,
             ..LatticeOptions::default()
         },
-        initial_velocity: vec![[0.0, 0.0, -0.2]],
-        dt: 0.08,
-        t_end: 4.0,
-        dnurbs_integrator: IntegratorKind::TerzopoulosQin,
-        msm_integrator: IntegratorKind::SymplecticEuler,
+        initial: InitialConditions {
+            velocities: vec![[0.0, 0.0, -0.2]],
+            ..InitialConditions::default()
+        },
+        time: TimeSettings {
+            dt: 0.08,
+            t_end: 4.0,
+            dnurbs_integrator: IntegratorKind::TerzopoulosQin,
+            msm_integrator: IntegratorKind::SymplecticEuler,
+        },
         fit: FitOptions::default(),
-        probes: vec![],
-        given: Some((
-            FitResult {
-                k_edge: Some(PAPER_K_EDGE),
-                k_diag: Some(PAPER_K_DIAG),
-                k_bend: None,
-                relative_residual: f64::NAN,
-            },
-            0.005,
-        )),
+        probes: vec![(0.5, 0.5)],
+        given: Some((paper_constants(), 0.005)),
     }
 }
 
@@ -70,7 +67,7 @@ fn derivation_invariants() {
     assert!(d.fit.free_dofs.relative_residual <= given.relative_residual_free_dofs + 1e-12);
     assert!(d.fit.trust_region.max_relative_difference_to_closed_form < 1e-8);
     // M = S ⊗ I_3 with 35 distinct eigenvalues of S; they sum to trace(S) = trace(M)/3.
-    let trace: f64 = setup.model.matrices().mass.diagonal().iter().sum();
+    let trace: f64 = setup.model().matrices().mass.diagonal().iter().sum();
     let sum: f64 = d.mass.eigenvalues.iter().sum();
     assert_eq!(d.mass.eigenvalues.len(), 35);
     assert!((3.0 * sum - trace).abs() < 1e-10 * trace);

@@ -1,12 +1,12 @@
 //! Assembly of the D-NURBS matrices `M`, `D`, `K` and the load vector `f_p` by Gauss–Legendre
-//! quadrature over the non-empty knot spans (paper eqs. (3)–(4), SPEC §3).
+//! quadrature over the non-empty knot spans (paper eqs. (3)–(4), docs/math.md §3).
 //!
 //! The sparsity pattern is computed once per discretization through
 //! [`AssemblyPattern`]: every element (knot span pair) owns a contiguous slice of the value
 //! vector holding its dense local block, the element kernels fill those slices in parallel with
 //! rayon (no locks: each element writes only its own slice), and `AssemblyPattern::assemble`
 //! sums duplicates into CSC. With constant weights the kernels work on the scalar `N × N`
-//! matrices `S` and the dof matrices are `S ⊗ I_3` (interleaved ordering, SPEC §1); with weights
+//! matrices `S` and the dof matrices are `S ⊗ I_3` (interleaved ordering, docs/math.md §1); with weights
 //! as unknowns the kernels fill full `4N × 4N` blocks through the Jacobian with weight columns.
 
 use nurbspring_geom::{
@@ -18,10 +18,10 @@ use rayon::prelude::*;
 
 use crate::{DnurbsError, DnurbsOptions, Geometry, Integration, Loads, Material};
 
-/// Full-size matrices on all dofs (ordering SPEC §1), evaluated at the geometry given.
+/// Full-size matrices on all dofs (ordering docs/math.md §1), evaluated at the geometry given.
 ///
 /// `mass = ∫∫ μ JᵀJ`, `damping = ∫∫ γ JᵀJ`, `stiffness` = paper eq. (4), `force = f_p`
-/// (gravity `μ g`, distributed and point loads; SPEC §3).
+/// (gravity `μ g`, distributed and point loads; docs/math.md §3).
 #[derive(Clone, Debug)]
 pub struct Matrices {
     /// M (paper eq. (3)).
@@ -30,7 +30,7 @@ pub struct Matrices {
     pub damping: SparseMatrix,
     /// K (paper eq. (4)).
     pub stiffness: SparseMatrix,
-    /// f_p, the generalized external force (SPEC §3).
+    /// f_p, the generalized external force (docs/math.md §3).
     pub force: Vec<f64>,
     /// 3 (constant weights) or 4 (weights as unknowns).
     pub dofs_per_point: usize,
@@ -44,7 +44,7 @@ impl Matrices {
 }
 
 /// Scalar `N × N` matrices of the constant-weight case: `M = S_M ⊗ I_3`, `D = S_D ⊗ I_3`,
-/// `K = S_K ⊗ I_3` (SPEC §3; `S_M = ∫∫ μ R Rᵀ`, `S_K = ∫∫ α11 R_u R_uᵀ + … + β22 R_vv R_vvᵀ`).
+/// `K = S_K ⊗ I_3` (docs/math.md §3; `S_M = ∫∫ μ R Rᵀ`, `S_K = ∫∫ α11 R_u R_uᵀ + … + β22 R_vv R_vvᵀ`).
 #[derive(Clone, Debug)]
 pub struct ScalarMatrices {
     /// S_M.
@@ -55,7 +55,7 @@ pub struct ScalarMatrices {
     pub stiffness: SparseMatrix,
 }
 
-/// Assembles `M`, `D`, `K` and `f_p` on all dofs (paper eqs. (3)–(4), SPEC §3) by Gauss
+/// Assembles `M`, `D`, `K` and `f_p` on all dofs (paper eqs. (3)–(4), docs/math.md §3) by Gauss
 /// quadrature over knot spans, pattern computed once, element values in parallel.
 ///
 /// With constant weights (3 dofs per control point) this is [`assemble_scalar`] expanded with
@@ -84,7 +84,7 @@ pub fn assemble(
     Assembler::new(geometry, options)?.assemble(geometry, material, loads)
 }
 
-/// The scalar matrices `S_M`, `S_D`, `S_K` with `M = S_M ⊗ I_3` etc. (SPEC §3, constant
+/// The scalar matrices `S_M`, `S_D`, `S_K` with `M = S_M ⊗ I_3` etc. (docs/math.md §3, constant
 /// weights; the fast path of [`assemble`]). `options.weights_as_dofs` is ignored.
 pub fn assemble_scalar(
     geometry: &Geometry,
@@ -101,7 +101,7 @@ pub fn assemble_scalar(
 /// Reusable assembly on fixed knot vectors: the element layout and the sparsity pattern are
 /// built once in [`Assembler::new`] (the expensive, value-independent part), then
 /// [`Assembler::assemble`] fills and sums element blocks for any control points, weights,
-/// material and loads on the same knots (paper eqs. (3)–(4), SPEC §3).
+/// material and loads on the same knots (paper eqs. (3)–(4), docs/math.md §3).
 pub struct Assembler {
     options: DnurbsOptions,
     knots: (Vec<f64>, Vec<f64>, (usize, usize)),
@@ -117,7 +117,7 @@ impl Assembler {
     /// Element layout and pattern for `geometry`'s knots: scalar `N × N` with constant weights,
     /// `4N × 4N` with `options.weights_as_dofs`.
     pub fn new(geometry: &Geometry, options: &DnurbsOptions) -> Result<Self, DnurbsError> {
-        check_quadrature(options.quadrature_points)?;
+        options.validate()?;
         let kind = if options.weights_as_dofs {
             AssemblerKind::General(GeneralAssembler::new(
                 geometry,
@@ -157,7 +157,7 @@ impl Assembler {
         material: &Material,
         loads: &Loads,
     ) -> Result<Matrices, DnurbsError> {
-        material.validate()?;
+        material.validate(geometry.is_curve())?;
         loads.validate(geometry)?;
         self.check_geometry(geometry)?;
         match &self.kind {
@@ -209,7 +209,7 @@ impl Assembler {
         geometry: &Geometry,
         material: &Material,
     ) -> Result<ScalarMatrices, DnurbsError> {
-        material.validate()?;
+        material.validate(geometry.is_curve())?;
         self.check_geometry(geometry)?;
         let AssemblerKind::Scalar(assembler) = &self.kind else {
             return Err(DnurbsError::InvalidOption {
@@ -244,18 +244,7 @@ fn knots_of(geometry: &Geometry) -> (Vec<f64>, Vec<f64>, (usize, usize)) {
     }
 }
 
-fn check_quadrature(points: usize) -> Result<(), DnurbsError> {
-    if points == 0 {
-        return Err(DnurbsError::InvalidOption {
-            name: "quadrature_points",
-            value: "0".into(),
-            reason: "a Gauss–Legendre rule needs at least one point per direction".into(),
-        });
-    }
-    Ok(())
-}
-
-/// Adds `J(u0, v0)ᵀ F` for every point load (SPEC §3) to `force`.
+/// Adds `J(u0, v0)ᵀ F` for every point load (docs/math.md §3) to `force`.
 pub(crate) fn add_point_loads(
     geometry: &Geometry,
     loads: &Loads,
@@ -299,7 +288,7 @@ fn derivative_order(terms: &[(usize, f64)], integration: Integration) -> usize {
 }
 
 /// `|c_u × c_v|` (surface) or `|c_u|` (curve) from the rational basis derivatives: the factor
-/// of the area measure (SPEC §3, `Integration::Area`).
+/// of the area measure (docs/math.md §3, `Integration::Area`).
 fn area_factor(geometry: &Geometry, jac: &Jacobian) -> f64 {
     let pts = geometry.control_points();
     let mut cu = [0.0; 3];
@@ -335,7 +324,7 @@ pub(crate) struct ElementLayout {
 
 impl ElementLayout {
     pub(crate) fn new(geometry: &Geometry, quadrature_points: usize) -> Result<Self, DnurbsError> {
-        check_quadrature(quadrature_points)?;
+        crate::options::check_quadrature_points(quadrature_points)?;
         let elements = geometry.quadrature(quadrature_points)?;
         let n_local = geometry.n_local();
         let mut points = Vec::with_capacity(elements.len() * n_local);
@@ -615,7 +604,7 @@ pub(crate) struct GeneralValues {
     pub(crate) stiffness: SparseMatrix,
     /// `∫∫ Jᵀ (μ g + f_d)` (distributed loads only; point loads are added separately).
     pub(crate) force: Vec<f64>,
-    /// `∫∫ μ Jᵀ c_prev` with `c_prev` the surface of a previous state (SPEC §3, last bullet);
+    /// `∫∫ μ Jᵀ c_prev` with `c_prev` the surface of a previous state (docs/math.md §3, last bullet);
     /// empty when no previous geometry was given.
     pub(crate) inertia: Vec<f64>,
 }
@@ -647,7 +636,7 @@ impl GeneralAssembler {
     }
 
     /// Fills `∫∫ JᵀJ`, `K`, `∫∫ Jᵀ f` and (with `previous`) `∫∫ μ Jᵀ c_prev` at `geometry`
-    /// (paper eqs. (3)–(4); SPEC §3, last bullet), element blocks in parallel.
+    /// (paper eqs. (3)–(4); docs/math.md §3, last bullet), element blocks in parallel.
     pub(crate) fn run(
         &self,
         geometry: &Geometry,

@@ -1,4 +1,4 @@
-//! Constraints (SPEC §4): fixed control points (by index and by outer rings), fixed weights,
+//! Constraints (docs/math.md §4): fixed control points (by index and by outer rings), fixed weights,
 //! and general linear constraints `A p = b` removed by the substitution `p = G q + g`.
 //!
 //! Internally every constrained model works on reduced coordinates `q` with
@@ -6,7 +6,7 @@
 //! removed, free first) through the null-space basis `G` of the linear constraints (identity
 //! without them), and the offset `o` holds the fixed values and the particular solution `g`.
 //! A matrix `A` becomes `Pᵀ A P`, a force `f` becomes `Pᵀ f`, and the coupling to the fixed
-//! dofs moves to the right-hand side as `Pᵀ A o` (SPEC §4).
+//! dofs moves to the right-hand side as `Pᵀ A o` (docs/math.md §4).
 
 use nurbspring_linalg::{DenseMatrix, LinalgError, SparseMatrix, affine_solution_space};
 use nurbspring_sim::DofMap;
@@ -22,7 +22,7 @@ pub struct LinearConstraint {
     pub rhs: f64,
 }
 
-/// Which generalized coordinates are constrained (SPEC §4).
+/// Which generalized coordinates are constrained (docs/math.md §4).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Constraints {
     /// Control points whose x, y, z are fixed at their initial values.
@@ -62,7 +62,7 @@ pub(crate) struct Reduction {
 }
 
 impl Reduction {
-    /// Resolves `constraints` for `geometry` with initial coordinates `p0` (SPEC §4).
+    /// Resolves `constraints` for `geometry` with initial coordinates `p0` (docs/math.md §4).
     ///
     /// With weights as unknowns and no weight fixed (by `fixed_weights` or a linear constraint
     /// on a weight), scaling every weight by the same factor leaves the surface unchanged, so
@@ -228,7 +228,7 @@ impl Reduction {
 }
 
 /// Linear constraints on the free dofs: `A_f p_f = b − A_c p_c`, solved as `p_f = G q + g`
-/// (SPEC §4). Only the free dofs that appear in a constraint are substituted (`G` is the
+/// (docs/math.md §4). Only the free dofs that appear in a constraint are substituted (`G` is the
 /// identity elsewhere), so the reduced matrices stay sparse. `None` when no constraint touches
 /// a free dof.
 fn build_affine(

@@ -2,18 +2,20 @@
 
 use nurbspring_geom::GeomError;
 use nurbspring_linalg::LinalgError;
-use nurbspring_sim::SimError;
+use nurbspring_sim::{ErrorKind, SimError};
 
 /// Everything that can go wrong when building or running a D-NURBS model.
 #[derive(Debug, thiserror::Error)]
 pub enum DnurbsError {
-    /// A material coefficient that is negative or not finite (SPEC §3: μ, γ, α, β ≥ 0).
-    #[error("material coefficient {name} must be finite and non-negative, got {value}")]
+    /// A material coefficient that breaks a rule of [`crate::Material::problems`].
+    #[error("material.{name} = {value}: {rule}")]
     InvalidMaterial {
         /// Field name: "mu", "gamma", "alpha11", "alpha22", "beta11", "beta12" or "beta22".
         name: &'static str,
         /// The value given.
         value: f64,
+        /// The rule it breaks.
+        rule: &'static str,
     },
     /// A constraint names a control point that does not exist.
     #[error(
@@ -88,4 +90,26 @@ pub enum DnurbsError {
     /// An error from the simulation crate.
     #[error(transparent)]
     Sim(#[from] SimError),
+}
+
+impl DnurbsError {
+    /// Input: the material, loads, constraints, options, geometry, or a system the input
+    /// leaves singular. Run: a state that became non-finite, linear algebra, a caller's size
+    /// mismatch. Simulation errors keep their own kind.
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            DnurbsError::InvalidMaterial { .. }
+            | DnurbsError::MissingControlPoint { .. }
+            | DnurbsError::Singular { .. }
+            | DnurbsError::InvalidTimeStep { .. }
+            | DnurbsError::InvalidLoad { .. }
+            | DnurbsError::InvalidConstraint { .. }
+            | DnurbsError::InvalidOption { .. }
+            | DnurbsError::Geom(_) => ErrorKind::Input,
+            DnurbsError::DimensionMismatch { .. }
+            | DnurbsError::NonFinite { .. }
+            | DnurbsError::Linalg(_) => ErrorKind::Run,
+            DnurbsError::Sim(e) => e.kind(),
+        }
+    }
 }

@@ -1,14 +1,16 @@
 //! The shape a D-NURBS model is built on: a NURBS surface or curve (paper eq. (1)), with
-//! conversions between the shape and the generalized coordinates `p` (SPEC §1).
+//! conversions between the shape and the generalized coordinates `p` (docs/math.md §1).
 
 use nurbspring_geom::{
-    GeomError, Jacobian, LocalRationalBasis, NurbsCurve, NurbsSurface, QuadratureElement,
+    Deriv, GeomError, Jacobian, LocalRationalBasis, NurbsCurve, NurbsSurface, QuadratureElement,
     curve_rule, surface_rule,
 };
 
+use nurbspring_linalg::SparseMatrix;
+
 use crate::DnurbsError;
 
-/// A NURBS surface or curve. Curves are the one-parameter case of everything (SPEC §2).
+/// A NURBS surface or curve. Curves are the one-parameter case of everything (docs/math.md §2).
 #[derive(Clone, Debug)]
 pub enum Geometry {
     /// A tensor-product surface, control point `(i, j)` at flat index `i · n_v + j`.
@@ -103,7 +105,7 @@ impl Geometry {
         }
     }
 
-    /// The generalized coordinates `p` of this shape (SPEC §1): `[x, y, z]` per control point,
+    /// The generalized coordinates `p` of this shape (docs/math.md §1): `[x, y, z]` per control point,
     /// or `[x, y, z, w]` with weights as unknowns.
     pub fn coordinates(&self, weights_as_dofs: bool) -> Vec<f64> {
         let m = self.dofs_per_point(weights_as_dofs);
@@ -166,7 +168,7 @@ impl Geometry {
         }
     }
 
-    /// `J(u, v) = ∂c/∂p` and its parametric derivatives up to `order` (SPEC §2).
+    /// `J(u, v) = ∂c/∂p` and its parametric derivatives up to `order` (docs/math.md §2).
     pub fn jacobian(
         &self,
         u: f64,
@@ -178,6 +180,29 @@ impl Geometry {
             Geometry::Surface(s) => s.jacobian(u, v, order, weights_as_dofs),
             Geometry::Curve(c) => c.jacobian(u, order, weights_as_dofs),
         }
+    }
+
+    /// The Jacobians `J(u_a, v_a)` stacked for every parameter point `a` (rows `3a .. 3a + 3`):
+    /// a `3 n_points × d N` matrix, `d` = 3 or 4 with weights as unknowns. Multiplied by `p` it
+    /// gives the points; for lattice nodes it is Ω of paper eq. (14), with `x(0) = Ω p(0)`
+    /// (eq. 11) and `ẋ(0) = Ω ṗ(0)` (eq. 18). `v` is ignored for curves. Errors name the first
+    /// parameter outside the domain.
+    pub fn stacked_jacobian(
+        &self,
+        params: &[(f64, f64)],
+        weights_as_dofs: bool,
+    ) -> Result<SparseMatrix, DnurbsError> {
+        let mut triplets = Vec::new();
+        for (a, &(u, v)) in params.iter().enumerate() {
+            let j = self.jacobian(u, v, 0, weights_as_dofs)?;
+            j.push_triplets(Deriv::Value, 3 * a, &mut triplets);
+        }
+        let d = self.dofs_per_point(weights_as_dofs);
+        Ok(SparseMatrix::from_triplets(
+            3 * params.len(),
+            d * self.n_control_points(),
+            &triplets,
+        )?)
     }
 
     /// [`Geometry::jacobian`] into caller buffers, parameters unchecked (assembly loops).

@@ -2,7 +2,7 @@
 //!
 //! Dynamic NURBS (D-NURBS, Terzopoulos & Qin 1994; the paper's Section II): a NURBS surface or
 //! curve with mass, damping and elastic energy, discretized on its control points
-//! (paper eqs. (2)–(4), (8); SPEC §3–4).
+//! (paper eqs. (2)–(4), (8); docs/math.md §3–4).
 //!
 //! - [`Material`] (μ, γ, α11, α22, β11, β12, β22) and [`Loads`] (gravity `μ g`, constant
 //!   distributed force, point loads `J(u0, v0)ᵀ F`);
@@ -15,7 +15,7 @@
 //!   integrator of `nurbspring-sim` applies), steady state (eq. (8)) and modes;
 //! - [`RationalStepper`]: weights as unknowns, matrices re-evaluated every step.
 //!
-//! The paper's experiment (Section IV, SPEC §7): a bicubic 7 × 5 patch, two outer rings of
+//! The paper's experiment (Section IV, docs/math.md §7): a bicubic 7 × 5 patch, two outer rings of
 //! control points fixed, μ = 25, β11 = β22 = 0.01, the free points pushed down at 0.2 m/s.
 //!
 //! ```
@@ -58,6 +58,7 @@ mod material;
 mod model;
 mod options;
 mod rational;
+mod run;
 
 pub use assembly::{Assembler, Matrices, ScalarMatrices, assemble, assemble_scalar};
 pub use constraints::{Constraints, LinearConstraint};
@@ -66,5 +67,6 @@ pub use geometry::{Geometry, outer_ring_points};
 pub use loads::{Loads, PointLoad};
 pub use material::Material;
 pub use model::{DENSE_MODES_LIMIT, DnurbsModel, Modes};
-pub use options::{DnurbsOptions, Integration, RestShape};
+pub use options::{DnurbsOptions, Integration, MAX_QUADRATURE_POINTS, RestShape};
 pub use rational::{DEFAULT_MIN_WEIGHT_RATIO, RationalStepper};
+pub use run::{integrator_problem, names as integrator_names};

@@ -1,11 +1,11 @@
-//! External loads (SPEC §3): gravity as a force density `μ g`, a constant distributed force
+//! External loads (docs/math.md §3): gravity as a force density `μ g`, a constant distributed force
 //! density, and point loads `J(u0, v0)ᵀ F`.
 
 use crate::{DnurbsError, Geometry};
 
 /// A concentrated force `F` at the surface point `c(u, v)`: generalized force `J(u, v)ᵀ F`
-/// (SPEC §3). For curves `v` is ignored.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// (docs/math.md §3). For curves `v` is ignored.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct PointLoad {
     /// Parameter u.
     pub u: f64,
@@ -19,7 +19,7 @@ pub struct PointLoad {
 ///
 /// The distributed force density is `f(u, v) = μ g + distributed`, integrated as
 /// `f_p = ∫∫ Jᵀ f du dv` (or over the area, see `Integration`).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Loads {
     /// Gravitational acceleration `g`; the force density is `μ g`.
     pub gravity: [f64; 3],
@@ -37,7 +37,7 @@ impl Loads {
             && self.point.iter().all(|p| p.force == [0.0; 3])
     }
 
-    /// The constant force density `μ g + distributed` (SPEC §3).
+    /// The constant force density `μ g + distributed` (docs/math.md §3).
     pub fn density(&self, mu: f64) -> [f64; 3] {
         std::array::from_fn(|x| mu * self.gravity[x] + self.distributed[x])
     }

@@ -1,4 +1,4 @@
-//! Material coefficients of D-NURBS (paper eqs. (3)–(4), SPEC §3).
+//! Material coefficients of D-NURBS (paper eqs. (3)–(4), docs/math.md §3).
 
 use crate::DnurbsError;
 
@@ -15,14 +15,17 @@ use crate::DnurbsError;
 /// ```
 /// use nurbspring_dnurbs::Material;
 /// let paper = Material { mu: 25.0, beta11: 0.01, beta22: 0.01, ..Material::default() };
-/// assert!(paper.validate().is_ok());
+/// assert!(paper.validate(false).is_ok());
 /// let bad = Material { gamma: -1.0, ..Material::default() };
-/// assert_eq!(bad.validate().unwrap_err().to_string(),
-///     "material coefficient gamma must be finite and non-negative, got -1");
+/// assert_eq!(bad.validate(false).unwrap_err().to_string(),
+///     "material.gamma = -1: material constants must not be negative");
 /// ```
-#[derive(Clone, Debug, PartialEq)]
+///
+/// In a scene file this is the `[material]` table, key for key (serde, unknown keys refused).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Material {
-    /// Mass density μ (≥ 0; 0 allows steady states only).
+    /// Mass density μ (> 0).
     pub mu: f64,
     /// Damping density γ.
     pub gamma: f64,
@@ -37,6 +40,9 @@ pub struct Material {
     /// Bending along v, β22.
     pub beta22: f64,
 }
+
+/// The coefficients that only a surface has.
+const SURFACE_ONLY: [&str; 3] = ["alpha22", "beta12", "beta22"];
 
 impl Default for Material {
     fn default() -> Self {
@@ -66,15 +72,37 @@ impl Material {
         ]
     }
 
-    /// Checks that every coefficient is finite and `≥ 0` (SPEC §3); the first offending one is
-    /// named in [`DnurbsError::InvalidMaterial`].
-    pub fn validate(&self) -> Result<(), DnurbsError> {
+    /// Every rule on the coefficients, each problem naming its field (docs/math.md §3): all
+    /// finite, `μ > 0` (the mass matrix must be positive definite), the others `≥ 0`; on a
+    /// curve (`curve = true`) only `mu`, `gamma`, `alpha11` and `beta11` apply, the others
+    /// must be 0. Empty when the material is valid.
+    pub fn problems(&self, curve: bool) -> Vec<DnurbsError> {
+        let mut out = Vec::new();
         for (name, value) in self.named() {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(DnurbsError::InvalidMaterial { name, value });
+            let rule = if !value.is_finite() {
+                Some("must be a finite number")
+            } else if name == "mu" && value <= 0.0 {
+                Some("the mass density must be positive")
+            } else if value < 0.0 {
+                Some("material constants must not be negative")
+            } else if curve && SURFACE_ONLY.contains(&name) && value != 0.0 {
+                Some("applies to surfaces only; a curve uses alpha11 and beta11")
+            } else {
+                None
+            };
+            if let Some(rule) = rule {
+                out.push(DnurbsError::InvalidMaterial { name, value, rule });
             }
         }
-        Ok(())
+        out
+    }
+
+    /// The first of [`Material::problems`], if any.
+    pub fn validate(&self, curve: bool) -> Result<(), DnurbsError> {
+        match self.problems(curve).into_iter().next() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
     }
 
     /// The stiffness coefficients per derivative slot `[·, u, v, uu, uv, vv]` of

@@ -1,4 +1,4 @@
-//! The constrained D-NURBS model (SPEC §3–4) as a [`DynamicModel`] on the reduced (free)
+//! The constrained D-NURBS model (docs/math.md §3–4) as a [`DynamicModel`] on the reduced (free)
 //! coordinates, with its steady state (paper eq. (8)) and modes.
 //!
 //! Sign convention of `nurbspring-sim`: `M q̈ + D q̇ + f_int(q) = f_ext(t)` on the free dofs,
@@ -24,7 +24,7 @@ use crate::{
 /// eigensolver; above it, sparse shift-invert Lanczos.
 pub const DENSE_MODES_LIMIT: usize = 2000;
 
-/// Eigenpairs of `K φ = ω² M φ` on the free dofs (SPEC §3), ascending.
+/// Eigenpairs of `K φ = ω² M φ` on the free dofs (docs/math.md §3), ascending.
 #[derive(Clone, Debug)]
 pub struct Modes {
     /// Angular frequencies ω (rad/s), `√max(λ, 0)`.
@@ -50,7 +50,7 @@ impl Modes {
 }
 
 /// A D-NURBS surface or curve with material, loads and constraints, reduced to its free dofs
-/// (SPEC §3–4). Implements [`DynamicModel`].
+/// (docs/math.md §3–4). Implements [`DynamicModel`].
 #[derive(Clone, Debug)]
 pub struct DnurbsModel {
     pub(crate) geometry: Geometry,
@@ -72,7 +72,7 @@ pub struct DnurbsModel {
 
 impl DnurbsModel {
     /// Assembles the matrices at `geometry` (paper eqs. (3)–(4)), resolves the constraints
-    /// (SPEC §4) and reduces everything to the free dofs.
+    /// (docs/math.md §4) and reduces everything to the free dofs.
     pub fn new(
         geometry: Geometry,
         material: Material,
@@ -80,7 +80,7 @@ impl DnurbsModel {
         constraints: &Constraints,
         options: DnurbsOptions,
     ) -> Result<Self, DnurbsError> {
-        material.validate()?;
+        material.validate(geometry.is_curve())?;
         loads.validate(&geometry)?;
         let wad = options.weights_as_dofs;
         let p0 = geometry.coordinates(wad);
@@ -163,7 +163,7 @@ impl DnurbsModel {
     }
 
     /// With weights as unknowns and no weight fixed: the weight dof pinned to remove the
-    /// common-scale gauge (see [`Constraints`] and SPEC §3), else `None`.
+    /// common-scale gauge (see [`Constraints`] and docs/math.md §3), else `None`.
     pub fn gauge_weight(&self) -> Option<usize> {
         self.reduction.gauge_weight
     }
@@ -179,12 +179,12 @@ impl DnurbsModel {
         self.reduction.n_q
     }
 
-    /// Full initial generalized coordinates `p(0)` (SPEC §1 ordering).
+    /// Full initial generalized coordinates `p(0)` (docs/math.md §1 ordering).
     pub fn p0(&self) -> &[f64] {
         &self.p0
     }
 
-    /// The rest shape `p_rest` (SPEC §3).
+    /// The rest shape `p_rest` (docs/math.md §3).
     pub fn p_rest(&self) -> &[f64] {
         &self.p_rest
     }
@@ -208,7 +208,7 @@ impl DnurbsModel {
     }
 
     /// Full `p` from reduced coordinates: free dofs from `q` (through `p = G q + g` with linear
-    /// constraints), fixed dofs at their `p(0)` values (SPEC §4).
+    /// constraints), fixed dofs at their `p(0)` values (docs/math.md §4).
     pub fn full_coordinates(&self, q_free: &[f64]) -> Vec<f64> {
         self.reduction.to_full(q_free)
     }
@@ -223,7 +223,7 @@ impl DnurbsModel {
         self.reduction.reduce_coordinates(p_full)
     }
 
-    /// Initial state on the free dofs from per-control-point velocities (SPEC §4: fixed dofs
+    /// Initial state on the free dofs from per-control-point velocities (docs/math.md §4: fixed dofs
     /// get zero). `velocity` has one entry per control point, or a single entry applied to
     /// every point (missing entries count as zero, extra ones are ignored);
     /// `weight_velocity` is `ẇ` of every free weight (4 dofs only).
@@ -249,7 +249,32 @@ impl DnurbsModel {
         }
     }
 
-    /// The elastic energy `½ (p − p_rest)ᵀ K (p − p_rest)` of a full `p` (SPEC §3).
+    /// [`DnurbsModel::initial_state`] with every free control point moved by `displacement` at
+    /// t = 0 (fixed points stay; with linear constraints the moved net is projected onto them).
+    pub fn initial_state_displaced(
+        &self,
+        velocity: &[[f64; 3]],
+        weight_velocity: f64,
+        displacement: [f64; 3],
+    ) -> State {
+        let mut state = self.initial_state(velocity, weight_velocity);
+        if displacement != [0.0; 3] {
+            let m = self.matrices.dofs_per_point;
+            let mut p = self.full_coordinates(&state.q);
+            let fixed = self.fixed_points();
+            for k in 0..self.geometry.n_control_points() {
+                if !fixed.contains(&k) {
+                    for x in 0..3 {
+                        p[m * k + x] += displacement[x];
+                    }
+                }
+            }
+            state.q = self.reduced_coordinates(&p);
+        }
+        state
+    }
+
+    /// The elastic energy `½ (p − p_rest)ᵀ K (p − p_rest)` of a full `p` (docs/math.md §3).
     pub fn elastic_energy(&self, p_full: &[f64]) -> f64 {
         let d: Vec<f64> = p_full
             .iter()
@@ -259,7 +284,7 @@ impl DnurbsModel {
         0.5 * self.matrices.stiffness.quadratic_form(&d)
     }
 
-    /// Steady state (paper eq. (8), SPEC §3): the full `p` solving
+    /// Steady state (paper eq. (8), docs/math.md §3): the full `p` solving
     /// `K_ff (p_f − p_rest,f) = f_f − K_fc (p_c − p_rest,c)` on the free dofs (projected by `Gᵀ`
     /// with linear constraints). Returns [`DnurbsError::Singular`] when the reduced stiffness is
     /// singular, e.g. a free-floating body (nothing fixed: rigid translations cost no energy).
@@ -345,18 +370,10 @@ impl DnurbsModel {
         Ok(self.reduction.to_full(&q))
     }
 
-    /// The `count` lowest modes `K φ = ω² M φ` on the free dofs (SPEC §3): the dense
+    /// The `count` lowest modes `K φ = ω² M φ` on the free dofs (docs/math.md §3): the dense
     /// generalized eigensolver when `n_free ≤ DENSE_MODES_LIMIT`, sparse shift-invert Lanczos
-    /// otherwise. Needs `μ > 0`.
+    /// otherwise (`μ > 0` is a rule of [`Material`], so M is positive definite).
     pub fn modes(&self, count: usize) -> Result<Modes, DnurbsError> {
-        if self.material.mu <= 0.0 {
-            return Err(DnurbsError::Singular {
-                detail: format!(
-                    "the mass matrix is zero (mu = {}); modes need mu > 0",
-                    self.material.mu
-                ),
-            });
-        }
         let n = self.reduction.n_q;
         let count = count.min(n);
         if count == 0 {
@@ -418,7 +435,7 @@ impl DynamicModel for DnurbsModel {
         self.damping_r.as_ref()
     }
 
-    /// `f_int(q) = K_r q + Pᵀ K (o − p_rest)` (SPEC §3–4).
+    /// `f_int(q) = K_r q + Pᵀ K (o − p_rest)` (docs/math.md §3–4).
     fn internal_force(&self, q: &[f64], out: &mut [f64]) {
         out.copy_from_slice(&self.f_int0);
         self.stiffness_r.mul_vec_add(1.0, q, out);

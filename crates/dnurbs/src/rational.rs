@@ -1,4 +1,4 @@
-//! Weights as unknowns (SPEC §3, last bullet): a time stepper for the nonlinear D-NURBS whose
+//! Weights as unknowns (docs/math.md §3, last bullet): a time stepper for the nonlinear D-NURBS whose
 //! `M`, `D`, `K` and `J` depend on the generalized coordinates.
 //!
 //! Equation of motion (paper eq. (2)): `M p̈ + D ṗ + K (p − p_rest) = f_p − I ṗ`. Using
@@ -62,7 +62,7 @@ impl Restriction {
     }
 }
 
-/// The weights-as-unknowns D-NURBS time stepper (SPEC §3, last bullet).
+/// The weights-as-unknowns D-NURBS time stepper (docs/math.md §3, last bullet).
 ///
 /// Works for 3 dofs per control point too (then it reproduces Terzopoulos–Qin).
 pub struct RationalStepper {
@@ -86,7 +86,7 @@ pub struct RationalStepper {
 
 impl RationalStepper {
     /// A stepper for `model` from `initial` (on the model's reduced coordinates) with step `dt`;
-    /// started with `p⁻ᐞᵗ = p⁰ − Δt ṗ⁰` (SPEC §3). The weight floor is
+    /// started with `p⁻ᐞᵗ = p⁰ − Δt ṗ⁰` (docs/math.md §3). The weight floor is
     /// `w_min = DEFAULT_MIN_WEIGHT_RATIO · min w(0)`.
     pub fn new(model: &DnurbsModel, initial: State, dt: f64) -> Result<Self, DnurbsError> {
         if !(dt.is_finite() && dt > 0.0) {
@@ -192,7 +192,7 @@ impl RationalStepper {
         }
     }
 
-    /// One step of the scheme in the module docs (SPEC §3, last bullet).
+    /// One step of the scheme in the module docs (docs/math.md §3, last bullet).
     pub fn step(&mut self) -> Result<(), DnurbsError> {
         let dt = self.dt;
         let (mu, gamma) = (self.material.mu, self.material.gamma);

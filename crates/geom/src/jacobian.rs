@@ -1,5 +1,5 @@
 //! The Jacobian `J(u, v) = ∂c/∂p` of a NURBS point with respect to the generalized
-//! coordinates (SPEC §2), stored sparsely, and its parametric derivatives.
+//! coordinates (docs/math.md §2), stored sparsely, and its parametric derivatives.
 
 /// Which parametric derivative of `J` (or of `c`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -143,6 +143,23 @@ impl Jacobian {
             if m == 4 {
                 let col = self.weight_columns[l][s];
                 out[k * m + 3] += alpha * (col[0] * f[0] + col[1] * f[1] + col[2] * f[2]);
+            }
+        }
+    }
+
+    /// Appends the non-zero entries of `J^{(d)}` as `(row0 + x, dof, value)` triplets: the block
+    /// of one point in a stacked Jacobian whose rows `row0 .. row0 + 3` belong to it (paper
+    /// eq. (14) stacks these for every lattice node).
+    pub fn push_triplets(&self, d: Deriv, row0: usize, out: &mut Vec<(usize, usize, f64)>) {
+        for l in 0..self.n_local() {
+            for c in 0..self.dofs_per_point {
+                let col = self.column(l, c, d);
+                let j = self.dof(l, c);
+                for (x, &value) in col.iter().enumerate() {
+                    if value != 0.0 {
+                        out.push((row0 + x, j, value));
+                    }
+                }
             }
         }
     }

@@ -3,7 +3,7 @@
 //! NURBS geometry for nurbspring: validated knot vectors, B-spline bases and their
 //! derivatives (The NURBS Book A2.1–A2.3), rational curves and surfaces with derivatives up to
 //! second order, the Jacobian `J = ∂c/∂p` of a point with respect to the control points (and
-//! weights) with its parametric derivatives (SPEC §2), knot insertion and refinement as
+//! weights) with its parametric derivatives (docs/math.md §2), knot insertion and refinement as
 //! matrices, and Gauss–Legendre quadrature.
 //!
 //! ```

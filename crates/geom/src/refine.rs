@@ -1,5 +1,5 @@
 //! Knot insertion, knot refinement and degree elevation as matrices (The NURBS Book §5.2,
-//! §5.3, §5.5; SPEC §2).
+//! §5.3, §5.5; docs/math.md §2).
 //!
 //! Each operation returns the new knot vector and a sparse matrix `C` with
 //! `P^w_new = C P^w_old` in homogeneous coordinates `P^w = (w x, w y, w z, w)`. `C` depends only
@@ -261,7 +261,7 @@ impl RefinementMatrix {
     }
 
     /// `C ⊗ I_d`: the matrix acting on generalized coordinates interleaved per control point
-    /// (`d = 3` for `[x0, y0, z0, x1, …]`; SPEC §1). With constant weights all equal to 1 this
+    /// (`d = 3` for `[x0, y0, z0, x1, …]`; docs/math.md §1). With constant weights all equal to 1 this
     /// maps coarse to fine generalized coordinates exactly; for other weights use
     /// [`RefinementMatrix::to_cartesian`] first.
     pub fn kron_identity(&self, d: usize) -> Self {

@@ -571,7 +571,7 @@ impl NurbsSurface {
         Ok((us, vs, pts))
     }
 
-    /// The Jacobian `J(u, v) = ∂c/∂p` and its parametric derivatives (SPEC §2), with 3 dofs
+    /// The Jacobian `J(u, v) = ∂c/∂p` and its parametric derivatives (docs/math.md §2), with 3 dofs
     /// per control point, or 4 when `weights_as_dofs` (the extra column of point k is
     /// `∂c/∂w_k = N_k (P_k − c) / W`). Only the `(p+1)(q+1)` non-zero blocks are stored.
     pub fn jacobian(

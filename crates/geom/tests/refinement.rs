@@ -286,7 +286,7 @@ proptest! {
     }
 }
 
-/// `Cᵀ M_fine C = M_coarse` for the Gram matrix `M = ∫ N Nᵀ du` of B-spline bases (SPEC §2),
+/// `Cᵀ M_fine C = M_coarse` for the Gram matrix `M = ∫ N Nᵀ du` of B-spline bases (docs/math.md §2),
 /// with Gauss rules exact for the degree-2p integrands; for refinement and for elevation.
 #[test]
 fn gram_matrix_is_preserved() {

@@ -1,4 +1,5 @@
-//! Errors of the output writers and readers (scene errors live in [`crate::scene`]).
+//! Errors of the output writers and readers. Every one is a failure of the run that
+//! writes (or reads back) the file, never bad input.
 
 use std::path::PathBuf;
 

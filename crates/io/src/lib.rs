@@ -1,8 +1,9 @@
 //! # nurbspring-io
 //!
-//! Files and pictures for nurbspring: scene files ([`scene`], TOML with every key checked),
-//! atomic writes ([`atomic`]), CSV, JSON, Matrix Market and OBJ ([`output`]), VTK XML grids and
-//! ParaView time series ([`vtk`]) and figures ([`plot`]).
+//! File formats and pictures for nurbspring, knowing no model: atomic writes ([`atomic`]), CSV,
+//! JSON, Matrix Market and OBJ ([`output`]), VTK XML grids and ParaView time series ([`vtk`])
+//! and figures ([`plot`]). Scene files and the translation between models and files live in
+//! `nurbspring-scene`.
 //!
 //! Everything written goes through [`atomic::write_atomic`]: a temporary file in the target's
 //! folder, synced, then renamed, so an interrupted run never leaves a half-written file.
@@ -28,7 +29,6 @@ pub mod atomic;
 mod error;
 pub mod output;
 pub mod plot;
-pub mod scene;
 pub mod vtk;
 
 pub use error::OutputError;

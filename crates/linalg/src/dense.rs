@@ -168,3 +168,8 @@ impl IndexMut<(usize, usize)> for DenseMatrix {
         &mut self.data[i * self.ncols + j]
     }
 }
+
+/// Euclidean norm `‖x‖₂`.
+pub(crate) fn norm(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
+}

@@ -1,4 +1,6 @@
-//! The error type of `nurbspring-linalg`.
+//! The error type of `nurbspring-linalg` and the argument checks shared by its solvers.
+
+use crate::DenseMatrix;
 
 /// Everything that can go wrong in `nurbspring-linalg`; every message carries the offending values.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -66,4 +68,23 @@ pub(crate) fn mismatch(
         expected: expected.to_string(),
         found: found.to_string(),
     }
+}
+
+/// Checks that `b` matches the rows of `a` and that both are finite.
+pub(crate) fn check_system(
+    op: &'static str,
+    a: &DenseMatrix,
+    b: &[f64],
+) -> Result<(), LinalgError> {
+    if b.len() != a.nrows() {
+        return Err(mismatch(
+            op,
+            format!("right-hand side of length {}", a.nrows()),
+            b.len(),
+        ));
+    }
+    if !a.data().iter().chain(b).all(|v| v.is_finite()) {
+        return Err(LinalgError::NonFinite { what: op });
+    }
+    Ok(())
 }

@@ -1,28 +1,9 @@
 //! Least squares: Householder QR, Lawson–Hanson NNLS, affine solution spaces by SVD.
 
 use crate::bridge::dense_ref;
-use crate::error::mismatch;
-use crate::solvers::norm;
+use crate::dense::norm;
+use crate::error::check_system;
 use crate::{DenseMatrix, LinalgError};
-
-/// Checks that `b` matches the rows of `a` and that both are finite.
-pub(crate) fn check_system(
-    op: &'static str,
-    a: &DenseMatrix,
-    b: &[f64],
-) -> Result<(), LinalgError> {
-    if b.len() != a.nrows() {
-        return Err(mismatch(
-            op,
-            format!("right-hand side of length {}", a.nrows()),
-            b.len(),
-        ));
-    }
-    if !a.data().iter().chain(b).all(|v| v.is_finite()) {
-        return Err(LinalgError::NonFinite { what: op });
-    }
-    Ok(())
-}
 
 /// `min ‖A x − b‖₂` for a full-column-rank `m × n` A (`m ≥ n`) by Householder QR
 /// (`A = Q R`, `x = R⁻¹ Qᵀ b`; Golub & Van Loan §5.3.3; faer's blocked Householder QR).
@@ -171,7 +152,7 @@ pub fn nonnegative_least_squares(a: &DenseMatrix, b: &[f64]) -> Result<Vec<f64>,
 /// All solutions of the underdetermined linear system `A x = b` as `x = g + N y`: `N`
 /// (columns, orthonormal) spans the null space of A and `g` is the minimum-norm particular
 /// solution, both from the full SVD `A = U Σ Vᵀ` (singular values `≤ tol·σ_max` count as zero;
-/// `tol ≤ 0` means `max(rows, cols)·ε`). Used for linear constraints `p = G q + g` (SPEC §4).
+/// `tol ≤ 0` means `max(rows, cols)·ε`). Used for linear constraints `p = G q + g` (docs/math.md §4).
 /// Errors with [`LinalgError::Singular`] when the system is inconsistent.
 ///
 /// ```

@@ -7,6 +7,7 @@ use faer::sparse::linalg::{LltError, LuError};
 use faer::{MatMut, Side};
 
 use crate::bridge::{dense_ref, sparse_ref};
+use crate::dense::norm;
 use crate::error::mismatch;
 use crate::{DenseMatrix, LinalgError, SparseMatrix};
 
@@ -243,13 +244,9 @@ impl LuSolver {
     }
 }
 
-pub(crate) fn norm(x: &[f64]) -> f64 {
-    x.iter().map(|v| v * v).sum::<f64>().sqrt()
-}
-
 fn check_rhs(op: &'static str, a: &DenseMatrix, b: &[f64]) -> Result<(), LinalgError> {
     check_square(op, a.nrows(), a.ncols())?;
-    crate::lstsq::check_system(op, a, b)
+    crate::error::check_system(op, a, b)
 }
 
 /// Solves `A x = b` for a dense symmetric positive-definite A by Cholesky `A = L Lᵀ` (faer,

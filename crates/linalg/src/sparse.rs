@@ -522,7 +522,7 @@ impl SparseMatrix {
     }
 
     /// The Kronecker product `S ⊗ I_d` in interleaved ordering: entry `(d·i + a, d·j + a) = S_ij`
-    /// for `a = 0..d` (the layout of constant-weight D-NURBS matrices, SPEC §1).
+    /// for `a = 0..d` (the layout of constant-weight D-NURBS matrices, docs/math.md §1).
     pub fn kron_identity(&self, d: usize) -> Self {
         let mut col_ptr = Vec::with_capacity(self.ncols * d + 1);
         let mut row_idx = Vec::with_capacity(self.nnz() * d);

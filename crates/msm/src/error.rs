@@ -2,7 +2,7 @@
 
 use nurbspring_geom::GeomError;
 use nurbspring_linalg::LinalgError;
-use nurbspring_sim::SimError;
+use nurbspring_sim::{ErrorKind, SimError};
 
 /// Everything that can be wrong with a lattice or a mass-spring run. Messages carry the
 /// offending values.
@@ -54,6 +54,33 @@ pub enum MsmError {
         /// The value given.
         value: f64,
     },
+    /// A lattice option that breaks a rule of [`crate::LatticeOptions::problems`]; `name` is the
+    /// field (`mass`, `damping`, `pre_strain`, `gravity[2]`, a constant's symbol such as
+    /// `k_edge`, or `nodes_u` / `nodes_v` of a uniform grid).
+    #[error("{name} = {value}: {rule}")]
+    InvalidOption {
+        /// The field.
+        name: String,
+        /// The value given.
+        value: f64,
+        /// The rule it breaks.
+        rule: &'static str,
+    },
+    /// Lattice options without any spring class.
+    #[error("no spring class is enabled: the lattice has no springs")]
+    NoSprings,
+    /// An entry of an explicit fixed-node list that names no node.
+    #[error(
+        "fixed node {position} of the list is node {node}, but the lattice has {n_nodes} nodes"
+    )]
+    FixedNodeOutside {
+        /// Position in the list.
+        position: usize,
+        /// The node named.
+        node: usize,
+        /// Number of nodes.
+        n_nodes: usize,
+    },
     /// A NaN or infinite input value.
     #[error("{what} {index} is not finite ({value})")]
     NonFinite {
@@ -92,13 +119,36 @@ pub enum MsmError {
     /// Dynamics error.
     #[error(transparent)]
     Sim(#[from] SimError),
-    /// A lattice file that does not parse.
-    #[error("lattice JSON: {0}")]
-    Json(String),
+    /// An `msm.json` text that does not parse or does not fit the schema.
+    #[error("not a valid msm.json at line {line}, column {column}: {message}")]
+    Json {
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 impl From<serde_json::Error> for MsmError {
     fn from(e: serde_json::Error) -> Self {
-        MsmError::Json(e.to_string())
+        MsmError::Json {
+            line: e.line(),
+            column: e.column(),
+            message: e.to_string(),
+        }
+    }
+}
+
+impl MsmError {
+    /// Input: everything about the lattice, its options and its file. Run: linear algebra.
+    /// Simulation errors keep their own kind.
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            MsmError::Linalg(_) => ErrorKind::Run,
+            MsmError::Sim(e) => e.kind(),
+            _ => ErrorKind::Input,
+        }
     }
 }

@@ -1,20 +1,26 @@
-//! `msm.json`: a lattice as nodes and springs, so users can bring their own mesh.
+//! `msm.json`: a mass-spring model as nodes and springs, with how to run it. This is the one
+//! schema of the file: `derive` writes it, `simulate` and `stability` read it, users bring
+//! their own mesh in it.
 //!
 //! ```json
 //! {"nodes": [{"position": [0, 0, 0], "mass": 1, "fixed": true, "damping": 0, "uv": [0, 0]}, …],
 //!  "springs": [{"a": 0, "b": 1, "kind": "structural", "k": 1, "rest_length": 0.5}, …],
-//!  "gravity": [0, 0, -9.81], "grid": [n_u, n_v]}
+//!  "gravity": [0, 0, -9.81], "grid": [n_u, n_v],
+//!  "scene": "examples/paper.toml", "initial_velocities": [[0, 0, 0], …],
+//!  "simulation": {"dt": 0.08, "t_end": 4, "integrator": "newmark"}}
 //! ```
 //! `fixed`, `damping`, `uv`, `gravity` and `grid` may be left out (false, 0, none, zero, none);
 //! a spring's `kind` defaults to `"structural"` and its `rest_length` to its initial length.
-//! Unknown keys are refused.
+//! `scene` (where the model came from), `initial_velocities` (one per node; zero when left
+//! out; ignored at fixed nodes) and `simulation` are optional. Unknown keys are refused.
 
+use nurbspring_sim::IntegratorKind;
 use serde::{Deserialize, Serialize};
 
 use crate::spring::{norm, sub};
 use crate::{MAX_NODES, MsmError, Spring, SpringKind, SpringLattice};
 
-/// One node of a [`LatticeFile`].
+/// One node of an [`MsmFile`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NodeRecord {
@@ -33,7 +39,7 @@ pub struct NodeRecord {
     pub uv: Option<[f64; 2]>,
 }
 
-/// One spring of a [`LatticeFile`].
+/// One spring of an [`MsmFile`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpringRecord {
@@ -55,10 +61,22 @@ fn structural() -> SpringKind {
     SpringKind::Structural
 }
 
-/// The JSON form of a [`SpringLattice`] (module docs give the format).
+/// How to run the model, as `derive` records it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct LatticeFile {
+pub struct FileSimulation {
+    /// Time step [s].
+    pub dt: f64,
+    /// End time [s].
+    pub t_end: f64,
+    /// Integrator.
+    pub integrator: IntegratorKind,
+}
+
+/// The file `msm.json` (module docs give the format).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MsmFile {
     /// Nodes; node `a` is the `a`-th entry.
     pub nodes: Vec<NodeRecord>,
     /// Springs.
@@ -69,24 +87,60 @@ pub struct LatticeFile {
     /// `[n_u, n_v]` when the nodes form a grid (`a = i · n_v + j`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grid: Option<[usize; 2]>,
+    /// Where the model came from (a scene file), for people reading the file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<String>,
+    /// Initial node velocities, one per node (`Ω ṗ(0)`, paper eq. (18), for a derived model).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_velocities: Option<Vec<[f64; 3]>>,
+    /// How to run it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simulation: Option<FileSimulation>,
 }
 
-impl LatticeFile {
-    /// Parses JSON text.
+impl MsmFile {
+    /// Parses JSON text (errors give the line and column).
     pub fn from_json_str(text: &str) -> Result<Self, MsmError> {
         Ok(serde_json::from_str(text)?)
     }
 
     /// Pretty-printed JSON text.
     pub fn to_json_string(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a lattice file always serializes")
+        serde_json::to_string_pretty(self).expect("an msm.json file always serializes")
+    }
+
+    /// The initial velocities, one per node (zero when the file gives none); a list of the
+    /// wrong length or with a non-finite value is refused.
+    pub fn velocities(&self) -> Result<Vec<[f64; 3]>, MsmError> {
+        let n = self.nodes.len();
+        match &self.initial_velocities {
+            None => Ok(vec![[0.0; 3]; n]),
+            Some(v) if v.len() != n => Err(MsmError::LengthMismatch {
+                what: "initial_velocities",
+                expected: n,
+                found: v.len(),
+            }),
+            Some(v) => {
+                for (a, x) in v.iter().enumerate() {
+                    if let Some(&bad) = x.iter().find(|c| !c.is_finite()) {
+                        return Err(MsmError::NonFinite {
+                            what: "initial velocity of node",
+                            index: a,
+                            value: bad,
+                        });
+                    }
+                }
+                Ok(v.clone())
+            }
+        }
     }
 }
 
 impl SpringLattice {
-    /// The file form of this lattice (every rest length written).
-    pub fn to_json(&self) -> LatticeFile {
-        LatticeFile {
+    /// The file form of this lattice (every rest length written; no scene, velocities or run
+    /// settings).
+    pub fn to_file(&self) -> MsmFile {
+        MsmFile {
             nodes: (0..self.n_nodes())
                 .map(|a| NodeRecord {
                     position: self.positions[a],
@@ -109,6 +163,9 @@ impl SpringLattice {
                 .collect(),
             gravity: self.gravity,
             grid: self.grid.map(|(u, v)| [u, v]),
+            scene: None,
+            initial_velocities: None,
+            simulation: None,
         }
     }
 
@@ -116,15 +173,15 @@ impl SpringLattice {
     /// given for every node or for none.
     ///
     /// ```
-    /// use nurbspring_msm::{LatticeFile, SpringLattice};
+    /// use nurbspring_msm::{MsmFile, SpringLattice};
     /// let text = r#"{"nodes": [{"position": [0, 0, 0], "mass": 1, "fixed": true},
     ///                          {"position": [2, 0, 0], "mass": 1}],
     ///               "springs": [{"a": 0, "b": 1, "k": 3}]}"#;
-    /// let lattice = SpringLattice::from_json(&LatticeFile::from_json_str(text).unwrap()).unwrap();
+    /// let lattice = SpringLattice::from_file(&MsmFile::from_json_str(text).unwrap()).unwrap();
     /// assert_eq!(lattice.springs[0].rest_length, 2.0);
     /// assert_eq!(lattice.fixed, vec![true, false]);
     /// ```
-    pub fn from_json(file: &LatticeFile) -> Result<Self, MsmError> {
+    pub fn from_file(file: &MsmFile) -> Result<Self, MsmError> {
         let n = file.nodes.len();
         if n > MAX_NODES {
             return Err(MsmError::TooLarge { nodes: n });
@@ -184,11 +241,11 @@ impl SpringLattice {
 
     /// Parses `msm.json` text into a validated lattice.
     pub fn from_json_str(text: &str) -> Result<Self, MsmError> {
-        Self::from_json(&LatticeFile::from_json_str(text)?)
+        Self::from_file(&MsmFile::from_json_str(text)?)
     }
 
     /// This lattice as pretty-printed `msm.json` text.
     pub fn to_json_string(&self) -> String {
-        self.to_json().to_json_string()
+        self.to_file().to_json_string()
     }
 }

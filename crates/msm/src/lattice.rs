@@ -1,13 +1,13 @@
-//! Spring lattices: from a NURBS surface (SPEC §5, paper Figure 1 and eq. (19)) or from any
+//! Spring lattices: from a NURBS surface (docs/math.md §5, paper Figure 1 and eq. (19)) or from any
 //! node and spring lists.
 
-use nurbspring_geom::NurbsSurface;
+use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_linalg::SparseMatrix;
 
 use crate::spring::sub;
 use crate::stiffness::Coefficient;
 use crate::topology::Topology;
-use crate::{MAX_NODES, MsmError, Spring, SpringKind};
+use crate::{Class, Constants, MAX_NODES, MsmError, Spring, SpringKind};
 
 /// Where the lattice nodes sit in the parameter domain.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -29,7 +29,7 @@ pub enum ParameterGrid {
 /// Which nodes are fixed.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub enum FixedNodes {
-    /// SPEC §5: a node is fixed when every control point with a non-zero basis value at its
+    /// docs/math.md §5: a node is fixed when every control point with a non-zero basis value at its
     /// `(u, v)` is fixed (the fixed control points are given to [`SpringLattice::from_surface`]).
     #[default]
     Auto,
@@ -42,21 +42,13 @@ pub enum FixedNodes {
 pub struct LatticeOptions {
     /// Parameter grid of the nodes.
     pub grid: ParameterGrid,
-    /// Structural springs between grid neighbours along u and v.
-    pub structural: bool,
-    /// Shear springs on both diagonals of each grid cell.
-    pub shear: bool,
-    /// Bending springs between second neighbours along u and v.
-    pub bending: bool,
-    /// Stiffness of structural springs (`k_edge`).
-    pub k_edge: f64,
-    /// Stiffness of shear springs (`k_diag`).
-    pub k_diag: f64,
-    /// Stiffness of bending springs (`k_bend`).
-    pub k_bend: f64,
+    /// The spring classes to build, each with its constant: structural springs between grid
+    /// neighbours along u and v (`k_edge`), shear springs on both diagonals of each cell
+    /// (`k_diag`), bending springs between second neighbours along u and v (`k_bend`).
+    pub springs: Constants,
     /// Mass of every node.
     pub mass: f64,
-    /// Damping factor `γ` of every node (force `−γ ẋ`, SPEC §5).
+    /// Damping factor `γ` of every node (force `−γ ẋ`, docs/math.md §5).
     pub damping: f64,
     /// Rest lengths are `(1 − pre_strain) ×` the initial lengths; `pre_strain > 0` puts the
     /// lattice under tension (geometric stiffness), `< 0` under compression. Must be `< 1`.
@@ -67,18 +59,82 @@ pub struct LatticeOptions {
     pub gravity: [f64; 3],
 }
 
+impl LatticeOptions {
+    /// Every rule on the options, each problem naming its field (docs/math.md §5): at least
+    /// one spring class; spring constants finite and `≥ 0`; the node mass finite and `> 0`;
+    /// damping finite and `≥ 0`; `pre_strain` in `(−1, 1)` (rest lengths positive and at most
+    /// twice the initial ones); gravity finite. Empty when the options are valid.
+    pub fn problems(&self) -> Vec<MsmError> {
+        let mut out = Vec::new();
+        let mut check = |name: &str, value: f64, ok: bool, rule: &'static str| {
+            if !value.is_finite() {
+                out.push(MsmError::InvalidOption {
+                    name: name.to_string(),
+                    value,
+                    rule: "must be a finite number",
+                });
+            } else if !ok {
+                out.push(MsmError::InvalidOption {
+                    name: name.to_string(),
+                    value,
+                    rule,
+                });
+            }
+        };
+        for (class, k) in self.springs.iter() {
+            check(
+                class.symbol(),
+                k,
+                k >= 0.0,
+                "spring constants must not be negative",
+            );
+        }
+        check(
+            "mass",
+            self.mass,
+            self.mass > 0.0,
+            "the node mass must be positive",
+        );
+        check(
+            "damping",
+            self.damping,
+            self.damping >= 0.0,
+            "the damping coefficient must not be negative",
+        );
+        check(
+            "pre_strain",
+            self.pre_strain,
+            self.pre_strain > -1.0 && self.pre_strain < 1.0,
+            "must lie in (-1, 1)",
+        );
+        for (c, &g) in self.gravity.iter().enumerate() {
+            check(&format!("gravity[{c}]"), g, true, "");
+        }
+        if self.springs.is_empty() {
+            out.push(MsmError::NoSprings);
+        }
+        out
+    }
+
+    /// The first of [`LatticeOptions::problems`], if any.
+    pub fn validate(&self) -> Result<(), MsmError> {
+        match self.problems().into_iter().next() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+}
+
 impl Default for LatticeOptions {
     /// Distinct knots, structural and shear springs with `k = 1`, mass 1, no damping, no
-    /// pre-strain, fixed nodes by the SPEC §5 rule, no gravity.
+    /// pre-strain, fixed nodes by the docs/math.md §5 rule, no gravity.
     fn default() -> Self {
         Self {
             grid: ParameterGrid::Knots,
-            structural: true,
-            shear: true,
-            bending: false,
-            k_edge: 1.0,
-            k_diag: 1.0,
-            k_bend: 1.0,
+            springs: Constants::from_pairs([
+                (Class::Spring(SpringKind::Structural), 1.0),
+                (Class::Spring(SpringKind::Shear), 1.0),
+            ]),
             mass: 1.0,
             damping: 0.0,
             pre_strain: 0.0,
@@ -92,7 +148,7 @@ impl Default for LatticeOptions {
 /// springs between them.
 ///
 /// Node positions are the initial (rest) positions. Generalized coordinates are interleaved
-/// `[x_0, y_0, z_0, x_1, …]` (SPEC §1); on a grid, node `a = i · n_v + j`.
+/// `[x_0, y_0, z_0, x_1, …]` (docs/math.md §1); on a grid, node `a = i · n_v + j`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpringLattice {
     /// Initial node positions.
@@ -113,13 +169,13 @@ pub struct SpringLattice {
     pub gravity: [f64; 3],
 }
 
-/// Basis values below this count as zero in the SPEC §5 fixed-node rule (the Cox–de Boor
+/// Basis values below this count as zero in the docs/math.md §5 fixed-node rule (the Cox–de Boor
 /// recursion gives exact zeros at knots; this only absorbs round-off).
 const BASIS_ZERO: f64 = 1e-14;
 
 impl SpringLattice {
     /// Nodes `x_ab = c(u_a, v_b)` on the parameter grid of `options` (paper eq. (19)), springs
-    /// by kind (SPEC §5), rest lengths `(1 − pre_strain) ×` the initial lengths. With
+    /// by kind (docs/math.md §5), rest lengths `(1 − pre_strain) ×` the initial lengths. With
     /// [`FixedNodes::Auto`] a node is fixed when every control point with a non-zero basis
     /// value at its `(u, v)` is in `fixed_control_points` (flat indices `k = i · n_v + j`).
     ///
@@ -138,8 +194,8 @@ impl SpringLattice {
         options: &LatticeOptions,
         fixed_control_points: &[usize],
     ) -> Result<Self, MsmError> {
-        validate_options(options)?;
-        let (us, vs) = grid_parameters(surface, &options.grid)?;
+        options.validate()?;
+        let (us, vs) = options.grid.parameters(surface)?;
         let (n_u, n_v) = (us.len(), vs.len());
         let n = n_u.saturating_mul(n_v);
         if n > MAX_NODES {
@@ -154,14 +210,15 @@ impl SpringLattice {
             FixedNodes::Auto => auto_fixed(surface, &us, &vs, fixed_control_points)?,
             FixedNodes::List(list) => {
                 let mut fixed = vec![false; n];
-                for &a in list {
-                    if a >= n {
-                        return Err(MsmError::InvalidParameter {
-                            name: format!("fixed node index (the lattice has {n} nodes)"),
-                            value: a as f64,
+                for (position, &node) in list.iter().enumerate() {
+                    if node >= n {
+                        return Err(MsmError::FixedNodeOutside {
+                            position,
+                            node,
+                            n_nodes: n,
                         });
                     }
-                    fixed[a] = true;
+                    fixed[node] = true;
                 }
                 fixed
             }
@@ -357,25 +414,39 @@ impl SpringLattice {
         3 * self.positions.len()
     }
 
-    /// The spring kinds with at least one spring, in [`SpringKind::ALL`] order.
-    pub fn kinds_present(&self) -> Vec<SpringKind> {
-        SpringKind::ALL
+    /// The classes with at least one element, ascending.
+    pub fn classes(&self) -> Vec<Class> {
+        Class::SPRINGS
             .into_iter()
-            .filter(|&kind| self.springs.iter().any(|s| s.kind == kind))
+            .filter(|&class| self.count(class) > 0)
             .collect()
     }
 
-    /// Number of springs of a kind.
-    pub fn count(&self, kind: SpringKind) -> usize {
-        self.springs.iter().filter(|s| s.kind == kind).count()
+    /// Number of elements of a class.
+    pub fn count(&self, class: Class) -> usize {
+        match class {
+            Class::Spring(kind) => self.springs.iter().filter(|s| s.kind == kind).count(),
+        }
     }
 
-    /// Sets the stiffness of every spring of `kind` (not validated here; [`crate::MsmModel::new`]
-    /// validates).
-    pub fn set_stiffness(&mut self, kind: SpringKind, k: f64) {
-        for s in self.springs.iter_mut().filter(|s| s.kind == kind) {
-            s.k = k;
+    /// Sets the constant of every element of each class in `constants` (classes not in it are
+    /// left alone; not validated here, [`crate::MsmModel::new`] validates).
+    pub fn set_constants(&mut self, constants: &Constants) {
+        for s in &mut self.springs {
+            if let Some(k) = constants.get(Class::Spring(s.kind)) {
+                s.k = k;
+            }
         }
+    }
+
+    /// The constants of the classes present, read from the first element of each (the
+    /// lattice's own constants when every element of a class shares one).
+    pub fn constants(&self) -> Constants {
+        let mut out = Constants::new();
+        for s in self.springs.iter().rev() {
+            out.set(Class::Spring(s.kind), s.k);
+        }
+        out
     }
 
     /// Sets every node mass to `m` (not validated here).
@@ -393,7 +464,7 @@ impl SpringLattice {
         Ok(())
     }
 
-    /// Sets every node's damping factor `γ` (force `−γ ẋ`, SPEC §5; not validated here).
+    /// Sets every node's damping factor `γ` (force `−γ ẋ`, docs/math.md §5; not validated here).
     pub fn set_damping(&mut self, gamma: f64) {
         self.damping.fill(gamma);
     }
@@ -482,7 +553,7 @@ impl SpringLattice {
         }
     }
 
-    /// Elastic energy `E = Σ k (|d| − l)² / 2` at positions `x` (SPEC §5). Panics when
+    /// Elastic energy `E = Σ k (|d| − l)² / 2` at positions `x` (docs/math.md §5). Panics when
     /// `x.len() ≠ 3N`.
     pub fn elastic_energy(&self, x: &[f64]) -> f64 {
         assert_eq!(
@@ -495,7 +566,7 @@ impl SpringLattice {
     }
 
     /// The tangent stiffness `K_T = −∂f_elastic/∂x` at `x`, full `3N × 3N` (paper eqs. (9)–(10),
-    /// SPEC §5): for each spring the block `B = k [ (l/|d|) n nᵀ + (1 − l/|d|) I ]` enters
+    /// docs/math.md §5): for each spring the block `B = k [ (l/|d|) n nᵀ + (1 − l/|d|) I ]` enters
     /// `(a, a)`, `(b, b)` with `+` and `(a, b)`, `(b, a)` with `−`. The pattern holds a full
     /// 3 × 3 block for every node and every pair joined by a spring (explicit zeros kept), the
     /// same at every `x`. Panics when `x.len() ≠ 3N`.
@@ -513,11 +584,12 @@ impl SpringLattice {
         k
     }
 
-    /// The unit-stiffness matrix `G_c` of one spring class at `x`: the tangent stiffness of the
-    /// springs of `kind` with `k = 1` (the geometric term included; both terms of eq. (9) are
-    /// proportional to `k`). When every spring of class `c` has stiffness `k_c`,
-    /// `K_T = Σ_c k_c G_c` (SPEC §5). Same pattern as [`SpringLattice::tangent_stiffness`].
-    pub fn unit_stiffness(&self, kind: SpringKind, x: &[f64]) -> SparseMatrix {
+    /// The unit-stiffness matrix `G_c` of one class at `x`: the tangent stiffness of the
+    /// elements of `class` with `k = 1` (for springs the geometric term included; both terms
+    /// of eq. (9) are proportional to `k`). When every element of class `c` has constant `k_c`,
+    /// `K_T = Σ_c k_c G_c` (docs/math.md §5). Same pattern as [`SpringLattice::tangent_stiffness`].
+    pub fn unit_stiffness(&self, class: Class, x: &[f64]) -> SparseMatrix {
+        let Class::Spring(kind) = class;
         assert_eq!(
             x.len(),
             self.n_dofs(),
@@ -547,86 +619,57 @@ fn argmin(values: impl Iterator<Item = f64>) -> usize {
     best.0
 }
 
-fn validate_options(o: &LatticeOptions) -> Result<(), MsmError> {
-    for (name, k) in [
-        ("k_edge", o.k_edge),
-        ("k_diag", o.k_diag),
-        ("k_bend", o.k_bend),
-    ] {
-        if !(k.is_finite() && k >= 0.0) {
-            return Err(MsmError::InvalidParameter {
-                name: format!("{name} (must be finite and ≥ 0)"),
-                value: k,
-            });
+impl ParameterGrid {
+    /// The node parameters along u and along v on `surface` (the lattice is their tensor
+    /// product, node `a = i · n_v + j`). Errors: a uniform grid with fewer than 2 nodes along
+    /// a direction, or more than [`MAX_NODES`] nodes.
+    pub fn parameters(&self, surface: &NurbsSurface) -> Result<(Vec<f64>, Vec<f64>), MsmError> {
+        let us = self.axis(surface.basis_u().knots(), "nodes_u")?;
+        let vs = self.axis(surface.basis_v().knots(), "nodes_v")?;
+        let total = us.len().saturating_mul(vs.len());
+        if total > MAX_NODES {
+            return Err(MsmError::TooLarge { nodes: total });
         }
+        Ok((us, vs))
     }
-    if !(o.mass.is_finite() && o.mass > 0.0) {
-        return Err(MsmError::NonPositiveMass {
-            node: 0,
-            mass: o.mass,
-        });
-    }
-    if !(o.damping.is_finite() && o.damping >= 0.0) {
-        return Err(MsmError::InvalidParameter {
-            name: "damping (must be finite and ≥ 0)".into(),
-            value: o.damping,
-        });
-    }
-    if !(o.pre_strain.is_finite() && o.pre_strain < 1.0) {
-        return Err(MsmError::InvalidParameter {
-            name: "pre_strain (must be finite and < 1)".into(),
-            value: o.pre_strain,
-        });
-    }
-    if let Some(&g) = o.gravity.iter().find(|g| !g.is_finite()) {
-        return Err(MsmError::NonFinite {
-            what: "gravity component",
-            index: 0,
-            value: g,
-        });
-    }
-    Ok(())
-}
 
-/// The node parameters along u and v.
-fn grid_parameters(
-    surface: &NurbsSurface,
-    grid: &ParameterGrid,
-) -> Result<(Vec<f64>, Vec<f64>), MsmError> {
-    let ku = surface.basis_u().knots();
-    let kv = surface.basis_v().knots();
-    Ok(match *grid {
-        ParameterGrid::Knots => (ku.distinct(), kv.distinct()),
-        ParameterGrid::Greville => {
-            let mut us = ku.greville();
-            let mut vs = kv.greville();
-            us.dedup();
-            vs.dedup();
-            (us, vs)
-        }
-        ParameterGrid::Uniform { nodes_u, nodes_v } => {
-            for (name, n) in [("nodes_u", nodes_u), ("nodes_v", nodes_v)] {
+    /// The node parameters along one direction with knot vector `knots`: its distinct knots,
+    /// its Greville abscissae (repeated values merged), or `nodes_u` uniform values (a curve
+    /// uses only `nodes_u`).
+    pub fn parameters_along(&self, knots: &KnotVector) -> Result<Vec<f64>, MsmError> {
+        self.axis(knots, "nodes_u")
+    }
+
+    /// The parameters along the direction whose uniform count is the field `name`.
+    fn axis(&self, knots: &KnotVector, name: &str) -> Result<Vec<f64>, MsmError> {
+        let out = match *self {
+            ParameterGrid::Knots => knots.distinct(),
+            ParameterGrid::Greville => {
+                let mut g = knots.greville();
+                g.dedup();
+                g
+            }
+            ParameterGrid::Uniform { nodes_u, nodes_v } => {
+                let n = if name == "nodes_v" { nodes_v } else { nodes_u };
                 if n < 2 {
-                    return Err(MsmError::InvalidParameter {
-                        name: format!("{name} of a uniform grid (must be ≥ 2)"),
+                    return Err(MsmError::InvalidOption {
+                        name: name.to_string(),
                         value: n as f64,
+                        rule: "a uniform lattice needs at least 2 nodes along each direction",
                     });
                 }
+                if n > MAX_NODES {
+                    return Err(MsmError::TooLarge { nodes: n });
+                }
+                let (a, b) = knots.domain();
+                nurbspring_geom::linspace(a, b, n)
             }
-            let total = nodes_u.saturating_mul(nodes_v);
-            if total > MAX_NODES {
-                return Err(MsmError::TooLarge { nodes: total });
-            }
-            let ((u0, u1), (v0, v1)) = surface.domain();
-            (
-                nurbspring_geom::linspace(u0, u1, nodes_u),
-                nurbspring_geom::linspace(v0, v1, nodes_v),
-            )
-        }
-    })
+        };
+        Ok(out)
+    }
 }
 
-/// SPEC §5 fixed rule on a tensor grid: node `(i, j)` is fixed when every control point
+/// docs/math.md §5 fixed rule on a tensor grid: node `(i, j)` is fixed when every control point
 /// `(k, l)` with `N_k(u_i) ≠ 0` and `N_l(v_j) ≠ 0` is fixed (weights are positive, so the
 /// rational basis value `R_kl` is non-zero exactly when `N_k N_l` is).
 fn auto_fixed(
@@ -686,8 +729,9 @@ fn auto_fixed(
 /// `(i, j)–(i+2, j)`; each group in node order.
 fn grid_springs(n_u: usize, n_v: usize, o: &LatticeOptions, positions: &[[f64; 3]]) -> Vec<Spring> {
     let idx = |i: usize, j: usize| i * n_v + j;
+    let has = |kind| o.springs.contains(Class::Spring(kind));
     let mut pairs: Vec<(usize, usize, SpringKind)> = Vec::new();
-    if o.structural {
+    if has(SpringKind::Structural) {
         for i in 0..n_u {
             for j in 0..n_v {
                 if j + 1 < n_v {
@@ -699,7 +743,7 @@ fn grid_springs(n_u: usize, n_v: usize, o: &LatticeOptions, positions: &[[f64; 3
             }
         }
     }
-    if o.shear {
+    if has(SpringKind::Shear) {
         for i in 0..n_u.saturating_sub(1) {
             for j in 0..n_v.saturating_sub(1) {
                 pairs.push((idx(i, j), idx(i + 1, j + 1), SpringKind::Shear));
@@ -707,7 +751,7 @@ fn grid_springs(n_u: usize, n_v: usize, o: &LatticeOptions, positions: &[[f64; 3
             }
         }
     }
-    if o.bending {
+    if has(SpringKind::Bend) {
         for i in 0..n_u {
             for j in 0..n_v {
                 if j + 2 < n_v {
@@ -723,11 +767,7 @@ fn grid_springs(n_u: usize, n_v: usize, o: &LatticeOptions, positions: &[[f64; 3
     pairs
         .into_iter()
         .map(|(a, b, kind)| {
-            let k = match kind {
-                SpringKind::Structural => o.k_edge,
-                SpringKind::Shear => o.k_diag,
-                SpringKind::Bend => o.k_bend,
-            };
+            let k = o.springs.value(Class::Spring(kind));
             let length = crate::spring::norm(sub(positions[a], positions[b]));
             Spring {
                 a,

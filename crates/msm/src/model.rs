@@ -1,6 +1,6 @@
 //! The mass-spring model as a [`DynamicModel`] on the free node coordinates.
 //!
-//! Equation of motion (paper eq. (7), SPEC §5, with the damping sign fixed to `−γ ẋ`):
+//! Equation of motion (paper eq. (7), docs/math.md §5, with the damping sign fixed to `−γ ẋ`):
 //! ```text
 //! m_a ẍ_a = f_elastic,a(x) − γ_a ẋ_a + m_a g
 //! ```
@@ -13,11 +13,13 @@
 use std::sync::OnceLock;
 
 use nurbspring_linalg::SparseMatrix;
-use nurbspring_sim::{DofMap, DynamicModel, StabilityLimit, State, SystemMatrix, stability_limit};
+use nurbspring_sim::{
+    DofMap, DynamicModel, IntegratorKind, StabilityLimit, State, SystemMatrix, stability_limit,
+};
 
 use crate::stiffness::{Coefficient, TangentPattern};
 use crate::topology::Topology;
-use crate::{MsmError, SpringKind, SpringLattice};
+use crate::{Class, MsmError, SpringLattice};
 
 /// A validated [`SpringLattice`] as a [`DynamicModel`] on the free node coordinates (diagonal
 /// mass and damping; `f_int = −f_elastic`; gravity as `f_ext`). See the module docs for the
@@ -38,6 +40,15 @@ pub struct MsmModel {
 }
 
 impl MsmModel {
+    /// The integrators an MSM runs with.
+    pub const INTEGRATORS: [IntegratorKind; 5] = [
+        IntegratorKind::SymplecticEuler,
+        IntegratorKind::VelocityVerlet,
+        IntegratorKind::Rk4,
+        IntegratorKind::BackwardEuler,
+        IntegratorKind::Newmark,
+    ];
+
     /// Validates the lattice ([`SpringLattice::validate`]) and precomputes the node-to-spring
     /// incidence of the free nodes. The tangent pattern is built on first use.
     pub fn new(lattice: SpringLattice) -> Result<Self, MsmError> {
@@ -110,6 +121,24 @@ impl MsmModel {
         }
     }
 
+    /// [`MsmModel::initial_state`] with every free node moved by `displacements[a]` at t = 0
+    /// (one entry per node; an empty slice moves nothing).
+    pub fn initial_state_displaced(
+        &self,
+        velocities: &[[f64; 3]],
+        displacements: &[[f64; 3]],
+    ) -> State {
+        let mut state = self.initial_state(velocities);
+        for (i, &a) in self.free_nodes().iter().enumerate() {
+            if let Some(d) = displacements.get(a) {
+                for x in 0..3 {
+                    state.q[3 * i + x] += d[x];
+                }
+            }
+        }
+        state
+    }
+
     /// All `3N` node coordinates from the free ones (fixed nodes at their initial positions).
     pub fn full_positions(&self, q_free: &[f64]) -> Vec<f64> {
         let mut x = self.x0.clone();
@@ -118,14 +147,15 @@ impl MsmModel {
     }
 
     /// `ω_max` of the linearized model at the initial positions and the explicit limit
-    /// `Δt_crit = 2/ω_max` (SPEC §5), by [`nurbspring_sim::stability_limit`].
+    /// `Δt_crit = 2/ω_max` (docs/math.md §5), by [`nurbspring_sim::stability_limit`].
     pub fn stability(&self) -> Result<StabilityLimit, MsmError> {
         Ok(stability_limit(self, &self.q0)?)
     }
 
     /// The unit-stiffness matrix `G_c` of one class on the free coordinates at `q` (so that
-    /// `tangent_stiffness(q) = Σ_c k_c G_c` when every spring of class `c` has stiffness `k_c`).
-    pub fn unit_stiffness(&self, kind: SpringKind, q: &[f64]) -> SparseMatrix {
+    /// `tangent_stiffness(q) = Σ_c k_c G_c` when every element of class `c` has constant `k_c`).
+    pub fn unit_stiffness(&self, class: Class, q: &[f64]) -> SparseMatrix {
+        let Class::Spring(kind) = class;
         self.assemble(q, &Coefficient::Unit(kind))
     }
 

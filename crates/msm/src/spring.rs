@@ -1,4 +1,4 @@
-//! Springs and the per-spring formulas of the paper's eqs. (5) and (9) (SPEC §5).
+//! Springs and the per-spring formulas of the paper's eqs. (5) and (9) (docs/math.md §5).
 //!
 //! For a spring `(a, b, k, l)` with `d = x_a − x_b`, `r = |d|`, `n = d / r`:
 //! - force on `a` (eq. 5): `f_a = k (l − r) n = k (l/r − 1) d`, and `f_b = −f_a`;
@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 /// The class of a spring (Figure 1 of the paper and its "interleaving" bending springs).
 ///
-/// Each class has one stiffness in the paper's fit, so `K_S = Σ_c k_c G_c` (SPEC §5).
+/// Each class has one stiffness in the paper's fit, so `K_S = Σ_c k_c G_c` (docs/math.md §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SpringKind {
@@ -119,7 +119,7 @@ pub(crate) fn stiffness_block(k: f64, l: f64, d: [f64; 3]) -> [[f64; 3]; 3] {
 }
 
 impl Spring {
-    /// Current length `|x_a − x_b|` for interleaved positions `x` (SPEC §1 ordering). Like every
+    /// Current length `|x_a − x_b|` for interleaved positions `x` (docs/math.md §1 ordering). Like every
     /// per-spring method, panics when a node index is out of range of `x`.
     pub fn length(&self, x: &[f64]) -> f64 {
         norm(sub(node(x, self.a), node(x, self.b)))
@@ -140,7 +140,7 @@ impl Spring {
         [s * d[0], s * d[1], s * d[2]]
     }
 
-    /// Elastic energy `k (|d| − l)² / 2` (SPEC §5).
+    /// Elastic energy `k (|d| − l)² / 2` (docs/math.md §5).
     pub fn energy(&self, x: &[f64]) -> f64 {
         energy(
             self.k,
@@ -150,7 +150,7 @@ impl Spring {
     }
 
     /// The block `B = −∂f_a/∂x_a = k [ (l/|d|) n nᵀ + (1 − l/|d|) I ]` of paper eq. (9)
-    /// (SPEC §5), row-major.
+    /// (docs/math.md §5), row-major.
     pub fn stiffness_block(&self, x: &[f64]) -> [[f64; 3]; 3] {
         stiffness_block(
             self.k,

@@ -1,5 +1,5 @@
 //! Tangent stiffness `K_T = −∂f/∂x` and unit-stiffness matrices `G_c` (paper eqs. (9)–(10),
-//! SPEC §5), on a block pattern computed once.
+//! docs/math.md §5), on a block pattern computed once.
 //!
 //! The pattern has a dense 3 × 3 block for every active node (diagonal) and for every pair of
 //! active nodes joined by at least one spring. In compressed-column storage the three columns

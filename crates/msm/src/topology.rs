@@ -214,7 +214,7 @@ impl Topology {
         }
     }
 
-    /// Elastic energy `Σ k (|d| − l)² / 2` of every spring (SPEC §5) with the active nodes at `x`.
+    /// Elastic energy `Σ k (|d| − l)² / 2` of every spring (docs/math.md §5) with the active nodes at `x`.
     pub fn energy(&self, x: &[[f64; 3]]) -> f64 {
         let n = self.n_active();
         assert_eq!(x.len(), n, "positions of {n} active nodes expected");

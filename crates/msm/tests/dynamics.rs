@@ -366,7 +366,7 @@ fn explicit_runs_diverge_just_above_the_stability_limit() {
 
 #[test]
 fn damping_and_gravity_settle_a_sagging_membrane() {
-    // Damping −γ ẋ (SPEC §5) removes energy: a pre-strained sheet under gravity, held at its
+    // Damping −γ ẋ (docs/math.md §5) removes energy: a pre-strained sheet under gravity, held at its
     // u = 0 and u = 1 edges, comes to rest where f_elastic + m g = 0.
     let mut lattice = curved_lattice(4, 4, 0.05);
     for a in (0..4).chain(12..16) {

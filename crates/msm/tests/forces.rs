@@ -1,10 +1,10 @@
 //! Spring forces, energy and stiffness against finite differences and identities
-//! (paper eqs. (5), (9)–(10); SPEC §5).
+//! (paper eqs. (5), (9)–(10); docs/math.md §5).
 
 mod support;
 
 use nurbspring_linalg::SparseMatrix;
-use nurbspring_msm::{MsmModel, SpringKind, SpringLattice};
+use nurbspring_msm::{Class, MsmModel, SpringKind, SpringLattice};
 use nurbspring_sim::DynamicModel;
 use proptest::prelude::*;
 use support::tolerances::*;
@@ -87,8 +87,8 @@ fn tangent_is_symmetric() {
 
 fn class_sum(lattice: &SpringLattice, x: &[f64]) -> SparseMatrix {
     let mut sum = SparseMatrix::zeros(x.len(), x.len());
-    for kind in lattice.kinds_present() {
-        let k_c = lattice.springs.iter().find(|s| s.kind == kind).unwrap().k;
+    for kind in lattice.classes() {
+        let k_c = lattice.constants().value(kind);
         let g = lattice.unit_stiffness(kind, x);
         sum = SparseMatrix::linear_combination(1.0, &sum, k_c, &g).unwrap();
     }
@@ -104,7 +104,7 @@ fn matrix_relative_error(a: &SparseMatrix, b: &SparseMatrix) -> f64 {
 fn tangent_is_sum_of_unit_matrices_at_rest_and_deformed() {
     // At rest (no pre-strain): only the k n nᵀ term.
     let lattice = curved_lattice(5, 4, 0.0);
-    assert_eq!(lattice.kinds_present(), SpringKind::ALL.to_vec());
+    assert_eq!(lattice.classes(), Class::SPRINGS.to_vec());
     let x0 = lattice.flat_positions();
     let err = matrix_relative_error(&class_sum(&lattice, &x0), &lattice.tangent_stiffness(&x0));
     eprintln!("K_T vs Σ k_c G_c at rest: {err:e}");
@@ -116,7 +116,7 @@ fn tangent_is_sum_of_unit_matrices_at_rest_and_deformed() {
     assert!(err < UNIT_SUM, "deformed: {err:e}");
     // And the unit matrices share the tangent's pattern.
     let k = lattice.tangent_stiffness(&x);
-    let g = lattice.unit_stiffness(SpringKind::Shear, &x);
+    let g = lattice.unit_stiffness(Class::Spring(SpringKind::Shear), &x);
     assert_eq!((k.col_ptr(), k.row_idx()), (g.col_ptr(), g.row_idx()));
 }
 

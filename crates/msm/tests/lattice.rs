@@ -1,11 +1,11 @@
-//! Lattices from surfaces and lists: the paper's lattice (SPEC §7), grids, the SPEC §5 fixed
+//! Lattices from surfaces and lists: the paper's lattice (docs/math.md §7), grids, the docs/math.md §5 fixed
 //! rule, validation and the JSON form.
 
 mod support;
 
 use nurbspring_msm::{
-    FixedNodes, LatticeFile, LatticeOptions, MAX_NODES, MsmError, MsmModel, ParameterGrid, Spring,
-    SpringKind, SpringLattice,
+    Class, Constants, FixedNodes, LatticeOptions, MAX_NODES, MsmError, MsmFile, MsmModel,
+    ParameterGrid, Spring, SpringKind, SpringLattice,
 };
 use nurbspring_sim::DynamicModel;
 use support::tolerances::*;
@@ -13,8 +13,10 @@ use support::{curved_lattice, curved_surface, paper_fixed_points, paper_surface}
 
 fn paper_lattice(greville: bool) -> SpringLattice {
     let options = LatticeOptions {
-        k_edge: 2.7225,
-        k_diag: 0.8661,
+        springs: Constants::from_pairs([
+            (Class::Spring(SpringKind::Structural), 2.7225),
+            (Class::Spring(SpringKind::Shear), 0.8661),
+        ]),
         mass: 0.005,
         ..Default::default()
     };
@@ -26,16 +28,19 @@ fn paper_lattice_builds_with_45_by_45_stiffness() {
     let lattice = paper_lattice(false);
     assert_eq!(lattice.n_nodes(), 15);
     assert_eq!(lattice.grid, Some((5, 3)));
-    assert_eq!(lattice.count(SpringKind::Structural), 22);
-    assert_eq!(lattice.count(SpringKind::Shear), 16);
+    assert_eq!(lattice.count(Class::Spring(SpringKind::Structural)), 22);
+    assert_eq!(lattice.count(Class::Spring(SpringKind::Shear)), 16);
     assert_eq!(
-        lattice.kinds_present(),
-        vec![SpringKind::Structural, SpringKind::Shear]
+        lattice.classes(),
+        vec![
+            Class::Spring(SpringKind::Structural),
+            Class::Spring(SpringKind::Shear)
+        ]
     );
     let params = lattice.params.as_ref().unwrap();
     assert_eq!(params[7], (0.5, 0.5));
     assert_eq!(params[14], (1.0, 1.0));
-    // SPEC §5 fixed rule: the nodes at (0.25, 0.5), (0.5, 0.5), (0.75, 0.5) see one of the three
+    // docs/math.md §5 fixed rule: the nodes at (0.25, 0.5), (0.5, 0.5), (0.75, 0.5) see one of the three
     // free control points (2..4, 2) and move; the 12 boundary nodes are fixed.
     let free: Vec<usize> = (0..15).filter(|&a| !lattice.fixed[a]).collect();
     assert_eq!(free, vec![4, 7, 10]);
@@ -59,7 +64,7 @@ fn flat_lattice_at_rest_has_no_out_of_plane_stiffness() {
         let mut g = vec![k];
         g.extend(
             lattice
-                .kinds_present()
+                .classes()
                 .into_iter()
                 .map(|c| lattice.unit_stiffness(c, &x0)),
         );
@@ -87,7 +92,7 @@ fn flat_lattice_at_rest_has_no_out_of_plane_stiffness() {
 
 #[test]
 fn greville_net_samples_the_affine_sheet() {
-    // On the Greville net the paper's surface is c(u, v) = (3u, 5v, 2) (SPEC §7).
+    // On the Greville net the paper's surface is c(u, v) = (3u, 5v, 2) (docs/math.md §7).
     let lattice = paper_lattice(true);
     for (x, &(u, v)) in lattice
         .positions
@@ -108,11 +113,19 @@ fn greville_net_samples_the_affine_sheet() {
 fn grids_and_spring_counts() {
     let s = curved_surface();
     let count = |grid: ParameterGrid, structural: bool, shear: bool, bending: bool| {
+        let springs = Constants::from_pairs(
+            [
+                (SpringKind::Structural, structural),
+                (SpringKind::Shear, shear),
+                (SpringKind::Bend, bending),
+            ]
+            .into_iter()
+            .filter(|(_, on)| *on)
+            .map(|(kind, _)| (Class::Spring(kind), 1.0)),
+        );
         let o = LatticeOptions {
             grid,
-            structural,
-            shear,
-            bending,
+            springs,
             ..Default::default()
         };
         let l = SpringLattice::from_surface(&s, &o, &[]).unwrap();
@@ -173,7 +186,11 @@ fn fixed_nodes_by_list_and_node_nearest() {
     };
     assert!(matches!(
         SpringLattice::from_surface(&curved_surface(), &bad, &[]),
-        Err(MsmError::InvalidParameter { .. })
+        Err(MsmError::FixedNodeOutside {
+            position: 0,
+            node: 15,
+            n_nodes: 15
+        })
     ));
 }
 
@@ -328,7 +345,11 @@ fn validation_errors() {
             ..Default::default()
         },
         LatticeOptions {
-            k_diag: -1.0,
+            springs: Constants::from_pairs([(Class::Spring(SpringKind::Shear), -1.0)]),
+            ..Default::default()
+        },
+        LatticeOptions {
+            pre_strain: -1.0,
             ..Default::default()
         },
         LatticeOptions {
@@ -346,30 +367,41 @@ fn validation_errors() {
         assert!(
             matches!(
                 SpringLattice::from_surface(&s, &bad, &[]),
-                Err(MsmError::InvalidParameter { .. })
+                Err(MsmError::InvalidOption { .. })
             ),
             "{bad:?}"
         );
     }
+    let zero_mass = LatticeOptions {
+        mass: 0.0,
+        ..Default::default()
+    };
+    assert_eq!(
+        zero_mass.validate().unwrap_err().to_string(),
+        "mass = 0: the node mass must be positive"
+    );
+    let no_springs = LatticeOptions {
+        springs: Constants::new(),
+        ..Default::default()
+    };
     assert!(matches!(
-        SpringLattice::from_surface(
-            &s,
-            &LatticeOptions {
-                mass: 0.0,
-                ..Default::default()
-            },
-            &[]
-        ),
-        Err(MsmError::NonPositiveMass { .. })
+        SpringLattice::from_surface(&s, &no_springs, &[]),
+        Err(MsmError::NoSprings)
     ));
-    // A model re-validates what set_stiffness / set_mass left unchecked.
+    // A model re-validates what set_constants / set_mass left unchecked.
     let mut l = curved_lattice(3, 3, 0.0);
-    l.set_stiffness(SpringKind::Shear, -0.5);
+    l.set_constants(&Constants::from_pairs([(
+        Class::Spring(SpringKind::Shear),
+        -0.5,
+    )]));
     assert!(matches!(
         MsmModel::new(l.clone()),
         Err(MsmError::NegativeStiffness { .. })
     ));
-    l.set_stiffness(SpringKind::Shear, 0.5);
+    l.set_constants(&Constants::from_pairs([(
+        Class::Spring(SpringKind::Shear),
+        0.5,
+    )]));
     l.set_mass(0.0);
     assert!(matches!(
         MsmModel::new(l.clone()),
@@ -432,9 +464,9 @@ fn json_round_trip() {
             .all(|(a, b)| close(*a, *b))
     );
     // The file form itself round-trips through serde.
-    let file: LatticeFile = serde_json::from_str(&text).unwrap();
+    let file: MsmFile = serde_json::from_str(&text).unwrap();
     assert_eq!(
-        LatticeFile::from_json_str(&file.to_json_string())
+        MsmFile::from_json_str(&file.to_json_string())
             .unwrap()
             .nodes
             .len(),
@@ -453,13 +485,13 @@ fn json_errors() {
     let unknown = r#"{"nodes": [], "springs": [], "colour": 3}"#;
     assert!(matches!(
         SpringLattice::from_json_str(unknown),
-        Err(MsmError::Json(_))
+        Err(MsmError::Json { .. })
     ));
     let bad_kind = r#"{"nodes": [{"position": [0,0,0], "mass": 1}, {"position": [1,0,0], "mass": 1}],
                        "springs": [{"a": 0, "b": 1, "k": 1, "kind": "torsion"}]}"#;
     assert!(matches!(
         SpringLattice::from_json_str(bad_kind),
-        Err(MsmError::Json(_))
+        Err(MsmError::Json { .. })
     ));
     let mixed_uv = r#"{"nodes": [{"position": [0,0,0], "mass": 1, "uv": [0, 0]}, {"position": [1,0,0], "mass": 1}],
                        "springs": []}"#;

@@ -2,6 +2,18 @@
 
 use nurbspring_linalg::LinalgError;
 
+/// What a failure means for whoever asked for the work. Every error enum of nurbspring answers
+/// `kind()`; the command-line tool maps the kinds to its exit codes (2, 1, 130) in one table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ErrorKind {
+    /// The input (scene, file, option) is not acceptable: fix it and run again.
+    Input,
+    /// The run failed although the input was accepted (divergence, a failed solve, I/O).
+    Run,
+    /// The run was interrupted on request (Ctrl-C, a signal, a cancel flag).
+    Cancelled,
+}
+
 /// Everything that can go wrong while setting up or running a simulation.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SimError {
@@ -16,6 +28,20 @@ pub enum SimError {
     InvalidDuration {
         /// The rejected end time.
         t_end: f64,
+    },
+    /// The run would take more than [`crate::MAX_STEPS`] steps.
+    #[error(
+        "t_end / Δt = {t_end:e} / {dt:e} asks for {steps:e} steps; at most {max:e} are allowed"
+    )]
+    TooManySteps {
+        /// The step.
+        dt: f64,
+        /// The end time.
+        t_end: f64,
+        /// Steps asked for.
+        steps: f64,
+        /// The limit.
+        max: f64,
     },
     /// An explicit scheme was asked to run above its stability limit `Δt_crit = 2/ω_max`.
     #[error(
@@ -75,4 +101,24 @@ pub enum SimError {
         /// Why not.
         reason: String,
     },
+}
+
+impl SimError {
+    /// Input problems: the time settings, an integrator that does not apply to the model, an
+    /// explicit scheme above its stability limit (the chosen Δt is the problem). Run failures:
+    /// divergence, a Newton failure, linear algebra. A size mismatch is a caller's bug: a run
+    /// failure.
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            SimError::InvalidTimeStep { .. }
+            | SimError::InvalidDuration { .. }
+            | SimError::TooManySteps { .. }
+            | SimError::Unstable { .. }
+            | SimError::NotSupported { .. } => ErrorKind::Input,
+            SimError::Diverged { .. }
+            | SimError::NewtonFailed { .. }
+            | SimError::DimensionMismatch { .. }
+            | SimError::Linalg(_) => ErrorKind::Run,
+        }
+    }
 }

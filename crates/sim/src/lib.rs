@@ -27,11 +27,11 @@ pub mod model;
 mod run;
 
 pub use dofmap::{DofMap, DofSlot};
-pub use error::SimError;
+pub use error::{ErrorKind, SimError};
 pub use integrators::{NewtonSettings, Stepper, make_stepper, make_stepper_with_options};
 pub use model::{DynamicModel, LinearModel, SystemMatrix};
 pub use nurbspring_linalg::{LinalgError, SparseMatrix};
 pub use run::{
-    IntegratorKind, NullObserver, Observer, RunOptions, RunSummary, Sample, StabilityLimit, State,
-    simulate, stability_limit, step_count,
+    IntegratorKind, MAX_STEPS, NullObserver, Observer, RunOptions, RunSummary, Sample,
+    StabilityLimit, State, check_time, simulate, stability_limit, step_count,
 };

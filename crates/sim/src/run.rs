@@ -8,10 +8,15 @@ use nurbspring_linalg::largest_generalized_eigenvalue;
 use crate::integrators::make_stepper_with_options;
 use crate::{DynamicModel, SimError};
 
-/// The time integrators, each written once against [`DynamicModel`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// Largest number of steps one run may take (10⁸): larger requests are refused up front.
+pub const MAX_STEPS: f64 = 1e8;
+
+/// The time integrators, each written once against [`DynamicModel`]. In files and on the
+/// command line they go by [`IntegratorKind::name`] (serde uses the same names).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum IntegratorKind {
-    /// Terzopoulos–Qin backward differences (SPEC §3); linear models; unconditionally stable.
+    /// Terzopoulos–Qin backward differences (docs/math.md §3); linear models; unconditionally stable.
     TerzopoulosQin,
     /// Newmark average acceleration (β = 1/4, γ = 1/2); energy conserving without damping.
     Newmark,
@@ -20,6 +25,7 @@ pub enum IntegratorKind {
     /// Symplectic (semi-implicit) Euler; explicit.
     SymplecticEuler,
     /// Velocity Verlet (= central difference); explicit.
+    #[serde(rename = "verlet", alias = "velocity-verlet")]
     VelocityVerlet,
     /// Classical fourth-order Runge–Kutta; explicit.
     Rk4,
@@ -117,6 +123,12 @@ pub struct RunOptions {
 }
 
 impl RunOptions {
+    /// Checks the time settings from `t0`: Δt positive and finite, t_end finite and not before
+    /// `t0`, at most [`MAX_STEPS`] steps. The one place these rules live.
+    pub fn validate(&self, t0: f64) -> Result<(), SimError> {
+        check_time(self.dt, self.t_end, t0)
+    }
+
     /// Defaults for everything but Δt, t_end and the integrator.
     pub fn new(dt: f64, t_end: f64, integrator: IntegratorKind) -> Self {
         Self {
@@ -224,6 +236,26 @@ pub fn stability_limit(model: &dyn DynamicModel, q: &[f64]) -> Result<StabilityL
     })
 }
 
+/// The time rules of [`RunOptions::validate`] on plain values.
+pub fn check_time(dt: f64, t_end: f64, t0: f64) -> Result<(), SimError> {
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(SimError::InvalidTimeStep { dt });
+    }
+    if !t_end.is_finite() || t_end < t0 {
+        return Err(SimError::InvalidDuration { t_end });
+    }
+    let steps = ((t_end - t0) / dt).ceil();
+    if steps > MAX_STEPS {
+        return Err(SimError::TooManySteps {
+            dt,
+            t_end,
+            steps,
+            max: MAX_STEPS,
+        });
+    }
+    Ok(())
+}
+
 /// Number of steps of size `dt` to reach `t_end` from `t0`: `⌈(t_end − t0)/dt⌉`, with a ratio
 /// within 1e-9 (relative) of an integer rounded to it.
 pub fn step_count(t0: f64, t_end: f64, dt: f64) -> usize {
@@ -279,12 +311,7 @@ pub fn simulate(
     observer: &mut dyn Observer,
 ) -> Result<RunSummary, SimError> {
     let dt = opts.dt;
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(SimError::InvalidTimeStep { dt });
-    }
-    if !opts.t_end.is_finite() || opts.t_end < initial.t {
-        return Err(SimError::InvalidDuration { t_end: opts.t_end });
-    }
+    opts.validate(initial.t)?;
     let n = model.n_dofs();
     crate::integrators::check_state_dims(model, &initial)?;
     let (mut omega_max, mut dt_critical) = (None, None);

@@ -2,13 +2,13 @@
 
 use std::path::PathBuf;
 
-use anyhow::anyhow;
 use clap::Args;
 use nurbspring_dnurbs::Geometry;
+use nurbspring_scene::export::{TessellationFormat, write_tessellation};
+use nurbspring_scene::{Error, Scene};
 use serde_json::json;
 
-use crate::convert;
-use crate::{CmdResult, Context, Failure};
+use crate::{CmdResult, Context, print_json};
 
 /// Flags of `nurbspring eval`.
 #[derive(Args, Debug)]
@@ -29,13 +29,18 @@ pub struct EvalArgs {
     out: Option<PathBuf>,
 }
 
-fn parse_params(s: &str, n: usize) -> Result<Vec<f64>, Failure> {
+/// `n` comma-separated finite numbers of `--at`.
+fn parse_params(s: &str, n: usize) -> Result<Vec<f64>, Error> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != n {
-        return Err(Failure::input(anyhow!(
-            "--at {s}: expected {n} comma-separated number{}",
-            if n == 1 { "" } else { "s" }
-        )));
+        return Err(Error::option(
+            "--at",
+            s,
+            format!(
+                "expected {n} comma-separated number{}",
+                if n == 1 { "" } else { "s" }
+            ),
+        ));
     }
     parts
         .iter()
@@ -43,29 +48,59 @@ fn parse_params(s: &str, n: usize) -> Result<Vec<f64>, Failure> {
             p.parse::<f64>()
                 .ok()
                 .filter(|x| x.is_finite())
-                .ok_or_else(|| Failure::input(anyhow!("--at {s}: `{p}` is not a finite number")))
+                .ok_or_else(|| Error::option("--at", s, format!("`{p}` is not a finite number")))
         })
         .collect()
 }
 
+/// `n` integers ≥ 2 of `--grid`, at most 5·10⁷ points.
+fn parse_grid(spec: &str, n: usize) -> Result<Vec<usize>, Error> {
+    let bad = || {
+        Error::option(
+            "--grid",
+            spec,
+            format!("expected {n} integer{} ≥ 2", if n == 1 { "" } else { "s" }),
+        )
+    };
+    let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
+    if parts.len() != n {
+        return Err(bad());
+    }
+    let v: Vec<usize> = parts
+        .iter()
+        .map(|p| p.parse::<usize>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    if v.iter().any(|&x| x < 2) {
+        return Err(bad());
+    }
+    if v.iter()
+        .try_fold(1usize, |a, &b| a.checked_mul(b))
+        .is_none_or(|p| p > 50_000_000)
+    {
+        return Err(Error::option("--grid", spec, "more than 5·10^7 points"));
+    }
+    Ok(v)
+}
+
 /// Evaluates the scene's geometry.
 pub fn run(_ctx: &Context, args: EvalArgs) -> CmdResult {
-    let scene = convert::load_scene(&args.scene)?;
-    let geometry = convert::geometry(&scene)?;
+    let scene = Scene::from_path(&args.scene)?;
+    let geometry = scene.build_geometry()?;
     if args.at.is_empty() && args.grid.is_none() {
-        return Err(Failure::input(anyhow!(
-            "nothing to evaluate: give --at U,V (repeatable) or --grid NU,NV --out FILE"
-        )));
+        return Err(Error::option(
+            "--at",
+            "(none)",
+            "nothing to evaluate: give --at U,V (repeatable) or --grid NU,NV --out FILE",
+        ));
     }
     let order = args.derivatives as usize;
     let mut points = Vec::new();
     for at in &args.at {
+        let outside = |e: nurbspring_geom::GeomError| Error::option("--at", at, e.to_string());
         match &geometry {
             Geometry::Surface(s) => {
                 let uv = parse_params(at, 2)?;
-                let d = s
-                    .derivatives(uv[0], uv[1], order)
-                    .map_err(|e| Failure::input(anyhow!("--at {at}: {e}")))?;
+                let d = s.derivatives(uv[0], uv[1], order).map_err(outside)?;
                 let mut entry = json!({"u": uv[0], "v": uv[1], "point": d.point});
                 if order >= 1 {
                     let mut dd = json!({"u": d.u, "v": d.v});
@@ -80,9 +115,7 @@ pub fn run(_ctx: &Context, args: EvalArgs) -> CmdResult {
             }
             Geometry::Curve(c) => {
                 let u = parse_params(at, 1)?;
-                let d = c
-                    .derivatives(u[0], order)
-                    .map_err(|e| Failure::input(anyhow!("--at {at}: {e}")))?;
+                let d = c.derivatives(u[0], order).map_err(outside)?;
                 let mut entry = json!({"u": u[0], "point": d.point});
                 if order >= 1 {
                     let mut dd = json!({"u": d.u});
@@ -97,16 +130,32 @@ pub fn run(_ctx: &Context, args: EvalArgs) -> CmdResult {
     }
     if let Some(grid) = &args.grid {
         let out = args.out.as_ref().ok_or_else(|| {
-            Failure::input(anyhow!(
-                "--grid needs --out FILE (.csv, .vts, .vtu or .obj)"
-            ))
+            Error::option(
+                "--grid",
+                grid,
+                "needs --out FILE (.csv, .vts, .vtu or .obj)",
+            )
         })?;
-        crate::output::write_tessellation(out, &geometry, grid)?;
+        let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
+        let format = TessellationFormat::from_extension(ext).ok_or_else(|| {
+            Error::option(
+                "--out",
+                out.display(),
+                format!("unknown format `{ext}` (use .csv, .vts, .vtu or .obj)"),
+            )
+        })?;
+        let n = match &geometry {
+            Geometry::Surface(_) => parse_grid(grid, 2)?,
+            Geometry::Curve(_) => {
+                let mut n = parse_grid(grid.split(',').next().unwrap_or(grid), 1)?;
+                n.push(1);
+                n
+            }
+        };
+        write_tessellation(out, &geometry, format, n[0], n[1])?;
     }
     if !args.at.is_empty() {
-        let text =
-            serde_json::to_string_pretty(&json!({"points": points})).map_err(Failure::run)?;
-        println!("{text}");
+        print_json(&json!({"points": points}))?;
     }
     Ok(())
 }

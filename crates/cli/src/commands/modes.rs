@@ -3,10 +3,10 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use nurbspring_scene::{Error, Scene};
 use serde_json::json;
 
-use crate::convert;
-use crate::{CmdResult, Context, Failure};
+use crate::{CmdResult, Context, print_json};
 
 /// Flags of `nurbspring modes`.
 #[derive(Args, Debug)]
@@ -21,33 +21,22 @@ pub struct ModesArgs {
 /// Prints the lowest angular frequencies and periods as JSON.
 pub fn run(_ctx: &Context, args: ModesArgs) -> CmdResult {
     if args.count == 0 {
-        return Err(Failure::input(anyhow::anyhow!(
-            "--count must be at least 1"
-        )));
+        return Err(Error::option("--count", 0, "must be at least 1"));
     }
-    let scene = convert::load_scene(&args.scene)?;
-    let model = convert::dnurbs_model(&scene)?;
+    let scene = Scene::from_path(&args.scene)?;
+    let model = scene.build_dnurbs()?;
     let modes = model
         .modes(args.count)
-        .map_err(|e| convert::dnurbs_failure(e).context(&args.scene))?;
+        .map_err(|e| Error::model(&scene.path, None, e))?;
     let periods: Vec<Option<f64>> = modes
         .omega
         .iter()
-        .map(|&w| {
-            if w > 0.0 {
-                Some(2.0 * std::f64::consts::PI / w)
-            } else {
-                None
-            }
-        })
+        .map(|&w| (w > 0.0).then(|| 2.0 * std::f64::consts::PI / w))
         .collect();
-    let text = serde_json::to_string_pretty(&json!({
+    print_json(&json!({
         "omega": modes.omega,
         "periods": periods,
         "units": {"omega": "rad/s", "periods": "s"},
         "free_dofs": model.dof_map().n_free(),
     }))
-    .map_err(Failure::run)?;
-    println!("{text}");
-    Ok(())
 }

@@ -3,11 +3,12 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use nurbspring_scene::Error;
+use nurbspring_scene::msm_file::load_msm;
 use serde_json::json;
 
-use crate::commands::simulate::MsmOverrides;
-use crate::convert;
-use crate::{CmdResult, Context, Failure};
+use crate::commands::{MsmFlags, flag};
+use crate::{CmdResult, Context, print_json};
 
 /// Flags of `nurbspring stability`.
 #[derive(Args, Debug)]
@@ -15,17 +16,15 @@ pub struct StabilityArgs {
     /// Scene file (TOML) or an msm.json lattice.
     scene: PathBuf,
     #[command(flatten)]
-    overrides: MsmOverrides,
+    overrides: MsmFlags,
 }
 
 /// Prints `{"omega_max": …, "dt_critical": …}`.
 pub fn run(_ctx: &Context, args: StabilityArgs) -> CmdResult {
-    let (model, _, _) = convert::msm_model(&args.scene, &args.overrides)?;
-    let s = model.stability().map_err(convert::msm_failure)?;
-    let text = serde_json::to_string_pretty(
-        &json!({"omega_max": s.omega_max, "dt_critical": s.dt_critical}),
-    )
-    .map_err(Failure::run)?;
-    println!("{text}");
-    Ok(())
+    let setup = load_msm(&args.scene, &args.overrides.overrides(), &flag)?;
+    let s = setup
+        .model
+        .stability()
+        .map_err(|e| Error::model(&setup.path, None, e))?;
+    print_json(&json!({"omega_max": s.omega_max, "dt_critical": s.dt_critical}))
 }

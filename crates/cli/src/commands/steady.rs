@@ -4,10 +4,12 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use nurbspring_derive::Omega;
+use nurbspring_scene::export::write_steady;
+use nurbspring_scene::{Error, Scene};
 use serde_json::json;
 
-use crate::convert;
-use crate::{CmdResult, Context, Failure, prepare_out_dir};
+use crate::{CmdResult, Context, prepare_out_dir, print_json};
 
 /// Flags of `nurbspring steady`.
 #[derive(Args, Debug)]
@@ -21,47 +23,26 @@ pub struct SteadyArgs {
 
 /// Solves `K (p − p_rest) = f` on the free dofs and prints the probes' displacements as JSON.
 pub fn run(_ctx: &Context, args: SteadyArgs) -> CmdResult {
-    let scene = convert::load_scene(&args.scene)?;
-    let model = convert::dnurbs_model(&scene)?;
+    let scene = Scene::from_path(&args.scene)?;
+    let model = scene.build_dnurbs()?;
     let p = model
         .steady_state()
-        .map_err(|e| convert::dnurbs_failure(e).context(&args.scene))?;
-    let probes = convert::probe_matrix(&scene, &model)?;
-    let mut now = vec![0.0; probes.nrows()];
-    let mut before = vec![0.0; probes.nrows()];
-    probes.mul_vec(&p, &mut now);
-    probes.mul_vec(model.p0(), &mut before);
-    let params = convert::probes(&scene);
+        .map_err(|e| Error::model(&scene.path, None, e))?;
+    let params = scene.probe_params()?;
+    let probes = Omega::new(model.geometry(), &params, scene.dnurbs.weights_as_dofs)
+        .map_err(|e| Error::model(&scene.path, Some("simulation.probes"), e))?;
+    let (now, before) = (probes.apply(&p), probes.apply(model.p0()));
     let points: Vec<_> = params
         .iter()
-        .enumerate()
-        .map(|(i, &(u, v))| {
-            let at = [now[3 * i], now[3 * i + 1], now[3 * i + 2]];
-            let d = [
-                at[0] - before[3 * i],
-                at[1] - before[3 * i + 1],
-                at[2] - before[3 * i + 2],
-            ];
+        .zip(now.iter().zip(&before))
+        .map(|(&(u, v), (at, b))| {
+            let d = [at[0] - b[0], at[1] - b[1], at[2] - b[2]];
             json!({"u": u, "v": v, "point": at, "displacement": d})
         })
         .collect();
     if let Some(dir) = &args.out {
         let out = prepare_out_dir(dir)?;
-        let dpp = model.matrices().dofs_per_point;
-        crate::output::write_geometry_frame(&out.join("steady.vts"), model.geometry(), &p, dpp)?;
-        let rows =
-            (0..model.geometry().n_control_points()).map(|k| p[dpp * k..dpp * k + dpp].to_vec());
-        let header: &[&str] = if dpp == 4 {
-            &["x", "y", "z", "w"]
-        } else {
-            &["x", "y", "z"]
-        };
-        nurbspring_io::output::write_csv(out.join("steady.csv"), header, rows)
-            .map_err(Failure::run)?;
+        write_steady(&out, &model, &p)?;
     }
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&json!({"probes": points})).map_err(Failure::run)?
-    );
-    Ok(())
+    print_json(&json!({"probes": points}))
 }

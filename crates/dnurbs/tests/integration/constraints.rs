@@ -1,4 +1,4 @@
-//! Constraints (SPEC §4): rings, fixed dofs in the initial state, linear constraints checked
+//! Constraints (docs/math.md §4): rings, fixed dofs in the initial state, linear constraints checked
 //! against a Lagrange-multiplier solution.
 
 use nurbspring_dnurbs::{

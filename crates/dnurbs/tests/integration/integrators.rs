@@ -1,4 +1,4 @@
-//! The sim integrators on the paper's scene (SPEC §3, §7): Newmark conserves energy with
+//! The sim integrators on the paper's scene (docs/math.md §3, §7): Newmark conserves energy with
 //! D = 0, Terzopoulos–Qin converges at first order to the exact modal solution, and the three
 //! agree at small Δt. Also the rest-shape readings and the modes.
 
@@ -119,7 +119,7 @@ fn modes_match_the_dense_generalized_eigenproblem() {
     assert_eq!((modes.vectors.nrows(), modes.vectors.ncols()), (9, 9));
 }
 
-/// SPEC §3 and §7: with `p_rest = 0` the printed net is not in equilibrium (in x) at t = 0,
+/// docs/math.md §3 and §7: with `p_rest = 0` the printed net is not in equilibrium (in x) at t = 0,
 /// while the Greville net (an affine sheet, zero bending energy) is.
 #[test]
 fn literal_rest_shape_is_in_equilibrium_only_on_the_greville_net() {

@@ -1,4 +1,4 @@
-//! Weights as unknowns (SPEC §3, last bullet): with the weights fixed the stepper reproduces
+//! Weights as unknowns (docs/math.md §3, last bullet): with the weights fixed the stepper reproduces
 //! the constant-weight motion; with free weights it converges as Δt → 0.
 
 use nurbspring_dnurbs::{
@@ -158,7 +158,7 @@ fn frozen_weights_as_dofs_model_is_positive_definite() {
 
 /// An independent reference for the free-weight motion: RK4 on the continuous equation
 /// `M(p) p̈ = f(p) − K(p)(p − p_rest) − D(p) ṗ − I(p, ṗ) ṗ` (paper eq. (2)) with
-/// `I ṗ = ∫∫ μ Jᵀ J̇ ṗ` and `J̇ ṗ` by a central difference of `J(p + ε ṗ) ṗ` (SPEC §3), on the same
+/// `I ṗ = ∫∫ μ Jᵀ J̇ ṗ` and `J̇ ṗ` by a central difference of `J(p + ε ṗ) ṗ` (docs/math.md §3), on the same
 /// free dofs (gauge weight pinned). The rational stepper must converge to it at first order:
 /// an inconsistent treatment of `I ṗ` would converge (to itself) but not to this.
 #[test]

@@ -78,7 +78,7 @@ pub fn max_abs_diff(x: &[f64], y: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The paper's control net (SPEC §7), as printed.
+/// The paper's control net (docs/math.md §7), as printed.
 pub fn paper_surface() -> NurbsSurface {
     let ku = KnotVector::try_new(vec![0., 0., 0., 0., 0.25, 0.5, 0.75, 1., 1., 1., 1.], 3).unwrap();
     let kv = KnotVector::try_new(vec![0., 0., 0., 0., 0.5, 1., 1., 1., 1.], 3).unwrap();

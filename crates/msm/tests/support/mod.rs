@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use nurbspring_geom::{KnotVector, NurbsSurface};
-use nurbspring_msm::{LatticeOptions, ParameterGrid, SpringLattice};
+use nurbspring_msm::{Class, Constants, LatticeOptions, ParameterGrid, SpringKind, SpringLattice};
 
 /// Tolerances, each relative to the real error of the method it checks.
 pub mod tolerances {
@@ -29,7 +29,7 @@ pub mod tolerances {
     pub const AFFINE_SURFACE: f64 = 1e-14;
 }
 
-/// The paper's knot vectors (SPEC §7).
+/// The paper's knot vectors (docs/math.md §7).
 pub fn paper_knots() -> (KnotVector, KnotVector) {
     (
         KnotVector::try_new(vec![0., 0., 0., 0., 0.25, 0.5, 0.75, 1., 1., 1., 1.], 3).unwrap(),
@@ -37,7 +37,7 @@ pub fn paper_knots() -> (KnotVector, KnotVector) {
     )
 }
 
-/// The paper's surface: control net as printed, or the Greville reading (SPEC §7).
+/// The paper's surface: control net as printed, or the Greville reading (docs/math.md §7).
 pub fn paper_surface(greville: bool) -> NurbsSurface {
     let (ku, kv) = paper_knots();
     let (px, py): (Vec<f64>, Vec<f64>) = if greville {
@@ -90,10 +90,11 @@ pub fn curved_lattice(n_u: usize, n_v: usize, pre_strain: f64) -> SpringLattice 
             nodes_u: n_u,
             nodes_v: n_v,
         },
-        bending: true,
-        k_edge: 3.0,
-        k_diag: 1.5,
-        k_bend: 0.7,
+        springs: Constants::from_pairs([
+            (Class::Spring(SpringKind::Structural), 3.0),
+            (Class::Spring(SpringKind::Shear), 1.5),
+            (Class::Spring(SpringKind::Bend), 0.7),
+        ]),
         pre_strain,
         ..Default::default()
     };

@@ -1,4 +1,4 @@
-//! The Terzopoulos–Qin scheme for D-NURBS (SPEC §3; Terzopoulos & Qin 1994, Qin & Terzopoulos
+//! The Terzopoulos–Qin scheme for D-NURBS (docs/math.md §3; Terzopoulos & Qin 1994, Qin & Terzopoulos
 //! 1996).
 //!
 //! ODE: `M q̈ + D q̇ + f_int(q) = f_ext(t)` with a linear `f_int(q) = K q + f_int(0)`

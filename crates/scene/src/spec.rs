@@ -1,6 +1,14 @@
 //! The sections of a scene file as Rust types. Every table is `deny_unknown_fields`, every
-//! section has a `Default` (the values documented in `crates/io/SCENE_KEYS.md`).
+//! section has a `Default` (the values documented in `docs/scenes.md`). Where a model type
+//! is the table key for key it is used directly: `[material]` is `nurbspring_dnurbs::Material`,
+//! `[dnurbs]` is `nurbspring_dnurbs::DnurbsOptions`, integrators are
+//! `nurbspring_sim::IntegratorKind`.
 
+use std::path::PathBuf;
+
+use nurbspring_derive::{FitDofs, FitMethod};
+use nurbspring_dnurbs::{DnurbsOptions, Material};
+use nurbspring_sim::IntegratorKind;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::ser::Serializer;
 use serde::{Deserialize, Serialize};
@@ -43,7 +51,7 @@ impl GeometrySpec {
     }
 }
 
-/// `[surface]`: a NURBS surface (SPEC §1–2). Control point `(i, j)` is `control_points[i][j]`,
+/// `[surface]`: a NURBS surface (docs/math.md §1–2). Control point `(i, j)` is `control_points[i][j]`,
 /// `i` along u (rows), `j` along v; flat index `k = i · n_v + j`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SurfaceSpec {
@@ -110,41 +118,6 @@ impl CurveSpec {
     }
 }
 
-/// `[material]`: D-NURBS material (SPEC §3). All values ≥ 0, `mu` > 0. For a curve only
-/// `mu`, `gamma`, `alpha11` (stretching α) and `beta11` (bending β) apply.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MaterialSpec {
-    /// Mass density μ per unit parameter area (> 0; default 1).
-    pub mu: f64,
-    /// Damping density γ (default 0).
-    pub gamma: f64,
-    /// Stretching α11 along u.
-    pub alpha11: f64,
-    /// Stretching α22 along v.
-    pub alpha22: f64,
-    /// Bending β11 (∂²/∂u²).
-    pub beta11: f64,
-    /// Twist β12 (∂²/∂u∂v).
-    pub beta12: f64,
-    /// Bending β22 (∂²/∂v²).
-    pub beta22: f64,
-}
-
-impl Default for MaterialSpec {
-    fn default() -> Self {
-        Self {
-            mu: 1.0,
-            gamma: 0.0,
-            alpha11: 0.0,
-            alpha22: 0.0,
-            beta11: 0.0,
-            beta12: 0.0,
-            beta22: 0.0,
-        }
-    }
-}
-
 /// `[loads]`: external forces (default: none).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -171,7 +144,7 @@ pub struct PointLoadSpec {
     pub force: [f64; 3],
 }
 
-/// `[constraints]`: fixed control points and general linear constraints (SPEC §4).
+/// `[constraints]`: fixed control points and general linear constraints (docs/math.md §4).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ConstraintsSpec {
@@ -251,53 +224,6 @@ impl Component {
     }
 }
 
-/// `[dnurbs]`: discretization options of the D-NURBS model.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct DnurbsSpec {
-    /// Weights as degrees of freedom (4 per control point) instead of constants.
-    pub weights_as_dofs: bool,
-    /// Gauss–Legendre points per direction and knot span, 1..=32 (default 4).
-    pub quadrature_points: usize,
-    /// Integrate over the parameter domain (default, the paper) or the surface area.
-    pub integrate_over: IntegrationDomain,
-    /// Rest shape of the elastic energy.
-    pub rest_shape: RestShape,
-}
-
-impl Default for DnurbsSpec {
-    fn default() -> Self {
-        Self {
-            weights_as_dofs: false,
-            quadrature_points: 4,
-            integrate_over: IntegrationDomain::Parameter,
-            rest_shape: RestShape::Initial,
-        }
-    }
-}
-
-/// Domain of the energy integrals (SPEC §3).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum IntegrationDomain {
-    /// `du dv` over the parameter square (the paper's literal reading).
-    #[default]
-    Parameter,
-    /// `|c_u × c_v| du dv`, the surface area element.
-    Area,
-}
-
-/// Rest shape of the D-NURBS energy (SPEC §3).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum RestShape {
-    /// Displacement form, `p_rest = p(0)`: the initial surface is in equilibrium.
-    #[default]
-    Initial,
-    /// Terzopoulos–Qin's literal energy on p itself, `p_rest = 0`.
-    Zero,
-}
-
 /// `[initial]`: initial state.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct InitialSpec {
@@ -320,11 +246,11 @@ pub struct SimulationSpec {
     pub dt: f64,
     /// End time in seconds (> 0; default 4).
     pub t_end: f64,
-    /// Integrator of the D-NURBS model.
-    pub dnurbs_integrator: DnurbsIntegrator,
-    /// Integrator of the mass-spring model.
-    pub msm_integrator: MsmIntegrator,
-    /// Write a ParaView frame every n steps (≥ 1).
+    /// Integrator of the D-NURBS model (one of `DnurbsModel::INTEGRATORS`).
+    pub dnurbs_integrator: IntegratorKind,
+    /// Integrator of the mass-spring model (one of `MsmModel::INTEGRATORS`).
+    pub msm_integrator: IntegratorKind,
+    /// Record a sample every n steps (≥ 1).
     pub save_every: usize,
     /// Extra probe points `[u, v]` (curves: `[u]`); `(0.5, 0.5)` is always probed first.
     pub probes: Vec<Vec<f64>>,
@@ -335,72 +261,15 @@ impl Default for SimulationSpec {
         Self {
             dt: 0.08,
             t_end: 4.0,
-            dnurbs_integrator: DnurbsIntegrator::TerzopoulosQin,
-            msm_integrator: MsmIntegrator::SymplecticEuler,
+            dnurbs_integrator: IntegratorKind::TerzopoulosQin,
+            msm_integrator: IntegratorKind::SymplecticEuler,
             save_every: 1,
             probes: Vec::new(),
         }
     }
 }
 
-/// Integrators offered for the D-NURBS model.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum DnurbsIntegrator {
-    /// Terzopoulos–Qin backward differences (the paper's).
-    #[default]
-    TerzopoulosQin,
-    /// Newmark average acceleration.
-    Newmark,
-    /// Exact modal solution (undamped, constant weights).
-    Modal,
-}
-
-impl DnurbsIntegrator {
-    /// The corresponding `nurbspring_sim` integrator.
-    pub fn kind(self) -> nurbspring_sim::IntegratorKind {
-        use nurbspring_sim::IntegratorKind as K;
-        match self {
-            DnurbsIntegrator::TerzopoulosQin => K::TerzopoulosQin,
-            DnurbsIntegrator::Newmark => K::Newmark,
-            DnurbsIntegrator::Modal => K::Modal,
-        }
-    }
-}
-
-/// Integrators offered for the mass-spring model.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum MsmIntegrator {
-    /// Symplectic Euler (explicit).
-    #[default]
-    SymplecticEuler,
-    /// Velocity Verlet (explicit).
-    #[serde(alias = "velocity-verlet")]
-    Verlet,
-    /// Classical Runge–Kutta (explicit).
-    Rk4,
-    /// Backward Euler with Newton iterations (implicit).
-    BackwardEuler,
-    /// Newmark average acceleration with Newton iterations (implicit).
-    Newmark,
-}
-
-impl MsmIntegrator {
-    /// The corresponding `nurbspring_sim` integrator.
-    pub fn kind(self) -> nurbspring_sim::IntegratorKind {
-        use nurbspring_sim::IntegratorKind as K;
-        match self {
-            MsmIntegrator::SymplecticEuler => K::SymplecticEuler,
-            MsmIntegrator::Verlet => K::VelocityVerlet,
-            MsmIntegrator::Rk4 => K::Rk4,
-            MsmIntegrator::BackwardEuler => K::BackwardEuler,
-            MsmIntegrator::Newmark => K::Newmark,
-        }
-    }
-}
-
-/// `[msm]`: the mass-spring lattice (SPEC §5).
+/// `[msm]`: the mass-spring lattice (docs/math.md §5).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MsmSpec {
@@ -428,7 +297,7 @@ pub struct MsmSpec {
     pub damping: f64,
     /// Rest length = (1 − pre_strain) × initial length; in (−1, 1).
     pub pre_strain: f64,
-    /// Fixed nodes: `"auto"` (SPEC §5 rule) or a list `[[a, b], …]` (curves `[[a], …]`).
+    /// Fixed nodes: `"auto"` (docs/math.md §5 rule) or a list `[[a, b], …]` (curves `[[a], …]`).
     pub fixed: MsmFixed,
 }
 
@@ -513,7 +382,7 @@ impl<'de> Deserialize<'de> for MsmFixed {
     }
 }
 
-/// `[fit]`: derivation of the spring constants and the mass (SPEC §6).
+/// `[fit]`: derivation of the spring constants and the mass (docs/math.md §6).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FitSpec {
@@ -527,28 +396,6 @@ pub struct FitSpec {
     pub mass: MassMethod,
     /// Candidate masses tried (0 = every distinct eigenvalue).
     pub max_candidates: usize,
-}
-
-/// Rows and columns of eq. (15).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum FitDofs {
-    /// Every dof (the paper's literal reading).
-    #[default]
-    All,
-    /// Free control-point dofs only.
-    Free,
-}
-
-/// Solver of the stiffness fit.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum FitMethod {
-    /// Normal equations of the linear least-squares problem.
-    #[default]
-    ClosedForm,
-    /// Trust-region iteration (the paper's method).
-    TrustRegion,
 }
 
 /// Choice of the node mass (Section III).
@@ -574,4 +421,94 @@ impl Default for OutputSpec {
     fn default() -> Self {
         Self { vtk_every: 1 }
     }
+}
+
+/// Largest number of control points, lattice nodes or array entries a scene may ask for
+/// (10⁷); larger requests are refused before anything is allocated.
+pub const MAX_ITEMS: usize = 10_000_000;
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The file it came from (used in messages).
+    pub path: PathBuf,
+    /// `[surface]` or `[curve]`.
+    pub geometry: GeometrySpec,
+    /// `[material]`.
+    pub material: Material,
+    /// `[loads]`.
+    pub loads: LoadsSpec,
+    /// `[constraints]`.
+    pub constraints: ConstraintsSpec,
+    /// `[dnurbs]`.
+    pub dnurbs: DnurbsOptions,
+    /// `[initial]`.
+    pub initial: InitialSpec,
+    /// `[simulation]`.
+    pub simulation: SimulationSpec,
+    /// `[msm]`.
+    pub msm: MsmSpec,
+    /// `[fit]`.
+    pub fit: FitSpec,
+    /// `[output]`.
+    pub output: OutputSpec,
+}
+
+/// The file as deserialized, before validation.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawScene {
+    pub(crate) surface: Option<RawSurface>,
+    pub(crate) curve: Option<RawCurve>,
+    #[serde(default)]
+    pub(crate) material: Material,
+    #[serde(default)]
+    pub(crate) loads: LoadsSpec,
+    #[serde(default)]
+    pub(crate) constraints: ConstraintsSpec,
+    #[serde(default)]
+    pub(crate) dnurbs: DnurbsOptions,
+    #[serde(default)]
+    pub(crate) initial: RawInitial,
+    #[serde(default)]
+    pub(crate) simulation: SimulationSpec,
+    #[serde(default)]
+    pub(crate) msm: MsmSpec,
+    #[serde(default)]
+    pub(crate) fit: FitSpec,
+    #[serde(default)]
+    pub(crate) output: OutputSpec,
+}
+
+/// `[surface]` with points as plain lists, so that their shapes are checked with key paths.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawSurface {
+    pub(crate) degree_u: usize,
+    pub(crate) degree_v: usize,
+    pub(crate) knots_u: Vec<f64>,
+    pub(crate) knots_v: Vec<f64>,
+    pub(crate) control_points: Vec<Vec<Vec<f64>>>,
+    #[serde(default)]
+    pub(crate) weights: Option<Vec<Vec<f64>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawCurve {
+    pub(crate) degree: usize,
+    pub(crate) knots: Vec<f64>,
+    pub(crate) control_points: Vec<Vec<f64>>,
+    #[serde(default)]
+    pub(crate) weights: Option<Vec<f64>>,
+}
+
+#[derive(Deserialize, Serialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub(crate) struct RawInitial {
+    pub(crate) velocity: [f64; 3],
+    pub(crate) weight_velocity: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) velocities: Option<toml::Value>,
+    pub(crate) displacement: [f64; 3],
 }

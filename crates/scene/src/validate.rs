@@ -3,17 +3,15 @@
 
 use std::path::Path;
 
+use nurbspring_dnurbs::{DnurbsError, DnurbsOptions, Geometry, Material};
 use nurbspring_geom::{GeomError, KnotVector, NurbsCurve, NurbsSurface};
+use nurbspring_io::output::format_f64;
+use nurbspring_msm::{MsmError, MsmModel};
+use nurbspring_sim::{SimError, check_time};
 
-use super::spec::*;
-use super::{MAX_ITEMS, Problem, RawCurve, RawInitial, RawScene, RawSurface, Scene, SceneError};
-use crate::output::format_f64;
-
-/// Largest number of time steps a scene may ask for.
-const MAX_STEPS: f64 = 1e9;
-
-/// Largest Gauss–Legendre rule.
-const MAX_QUADRATURE: usize = 32;
+use crate::build;
+use crate::spec::*;
+use crate::{Problem, SceneError};
 
 /// Collected problems.
 #[derive(Default)]
@@ -64,12 +62,6 @@ impl Problems {
         }
     }
 
-    fn nonnegative(&mut self, key: &str, v: f64, what: &str) {
-        if self.finite(key, v) && v < 0.0 {
-            self.push(key, format_f64(v), format!("{what} must not be negative"));
-        }
-    }
-
     fn positive(&mut self, key: &str, v: f64, what: &str) {
         if self.finite(key, v) && v <= 0.0 {
             self.push(key, format_f64(v), format!("{what} must be positive"));
@@ -85,18 +77,17 @@ impl Problems {
 
 /// What later checks need to know about the geometry.
 struct GeomInfo {
+    /// The geometry, built and valid.
+    geometry: Geometry,
     surface: bool,
     n_u: usize,
     n_v: usize,
     domain_u: (f64, f64),
     domain_v: (f64, f64),
-    /// Distinct knot values inside the domain (lattice on the knots).
-    distinct_u: usize,
-    distinct_v: usize,
 }
 
 /// Validates everything and builds the scene.
-pub(super) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneError> {
+pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneError> {
     let mut p = Problems::default();
     let (geometry, info) = match (raw.surface, raw.curve) {
         (Some(_), Some(_)) => {
@@ -142,7 +133,7 @@ pub(super) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneErro
         info.as_ref(),
         &mut p,
     );
-    check_msm(&raw.msm, info.as_ref(), &mut p);
+    check_msm(&raw.msm, &raw.loads, info.as_ref(), &mut p);
     if raw.output.vtk_every == 0 {
         p.push("output.vtk_every", "0", "must be at least 1");
     }
@@ -458,7 +449,7 @@ fn net_problem(section: &str, n_v: Option<usize>, e: GeomError) -> Problem {
 }
 
 /// Builds the surface through `nurbspring-geom`, mapping its errors to key paths.
-pub(super) fn build_surface(s: &SurfaceSpec) -> Result<NurbsSurface, Problem> {
+pub(crate) fn build_surface(s: &SurfaceSpec) -> Result<NurbsSurface, Problem> {
     let ku = KnotVector::try_new(s.knots_u.clone(), s.degree_u)
         .map_err(|e| knot_problem("surface", "knots_u", "degree_u", &s.knots_u, e))?;
     let kv = KnotVector::try_new(s.knots_v.clone(), s.degree_v)
@@ -492,20 +483,11 @@ pub(super) fn build_surface(s: &SurfaceSpec) -> Result<NurbsSurface, Problem> {
 }
 
 /// Builds the curve through `nurbspring-geom`, mapping its errors to key paths.
-pub(super) fn build_curve(c: &CurveSpec) -> Result<NurbsCurve, Problem> {
+pub(crate) fn build_curve(c: &CurveSpec) -> Result<NurbsCurve, Problem> {
     let kv = KnotVector::try_new(c.knots.clone(), c.degree)
         .map_err(|e| knot_problem("curve", "knots", "degree", &c.knots, e))?;
     NurbsCurve::try_new(kv, c.control_points.clone(), c.flat_weights())
         .map_err(|e| net_problem("curve", None, e))
-}
-
-/// Distinct knot values inside the domain.
-fn distinct_in_domain(k: &KnotVector) -> usize {
-    let (a, b) = k.domain();
-    k.distinct()
-        .into_iter()
-        .filter(|&x| x >= a && x <= b)
-        .count()
 }
 
 fn surface_info(s: &SurfaceSpec, p: &mut Problems) -> Option<GeomInfo> {
@@ -516,8 +498,7 @@ fn surface_info(s: &SurfaceSpec, p: &mut Problems) -> Option<GeomInfo> {
             n_v: s.n_v(),
             domain_u: surface.basis_u().knots().domain(),
             domain_v: surface.basis_v().knots().domain(),
-            distinct_u: distinct_in_domain(surface.basis_u().knots()),
-            distinct_v: distinct_in_domain(surface.basis_v().knots()),
+            geometry: Geometry::Surface(surface),
         }),
         Err(problem) => {
             p.0.push(problem);
@@ -534,8 +515,7 @@ fn curve_info(c: &CurveSpec, p: &mut Problems) -> Option<GeomInfo> {
             n_v: 1,
             domain_u: curve.basis().knots().domain(),
             domain_v: (0.0, 0.0),
-            distinct_u: distinct_in_domain(curve.basis().knots()),
-            distinct_v: 1,
+            geometry: Geometry::Curve(curve),
         }),
         Err(problem) => {
             p.0.push(problem);
@@ -544,31 +524,12 @@ fn curve_info(c: &CurveSpec, p: &mut Problems) -> Option<GeomInfo> {
     }
 }
 
-fn check_material(m: &MaterialSpec, info: Option<&GeomInfo>, p: &mut Problems) {
-    p.positive("material.mu", m.mu, "the mass density");
-    for (key, v) in [
-        ("material.gamma", m.gamma),
-        ("material.alpha11", m.alpha11),
-        ("material.alpha22", m.alpha22),
-        ("material.beta11", m.beta11),
-        ("material.beta12", m.beta12),
-        ("material.beta22", m.beta22),
-    ] {
-        p.nonnegative(key, v, "material constants");
-    }
-    if info.is_some_and(|g| !g.surface) {
-        for (key, v) in [
-            ("material.alpha22", m.alpha22),
-            ("material.beta12", m.beta12),
-            ("material.beta22", m.beta22),
-        ] {
-            if v != 0.0 && v.is_finite() {
-                p.push(
-                    key,
-                    format_f64(v),
-                    "applies to surfaces only; a curve uses alpha11 and beta11",
-                );
-            }
+/// The rules of `Material::problems`, with their key paths.
+fn check_material(m: &Material, info: Option<&GeomInfo>, p: &mut Problems) {
+    let curve = info.is_some_and(|g| !g.surface);
+    for e in m.problems(curve) {
+        if let DnurbsError::InvalidMaterial { name, value, rule } = e {
+            p.push(format!("material.{name}"), format_f64(value), rule);
         }
     }
 }
@@ -637,7 +598,7 @@ fn check_point_index(p: &mut Problems, key: &str, idx: &[usize], g: &GeomInfo) {
 
 fn check_constraints(
     c: &ConstraintsSpec,
-    d: &DnurbsSpec,
+    d: &DnurbsOptions,
     info: Option<&GeomInfo>,
     p: &mut Problems,
 ) {
@@ -703,13 +664,15 @@ fn check_constraints(
     }
 }
 
-fn check_dnurbs(d: &DnurbsSpec, p: &mut Problems) {
-    if !(1..=MAX_QUADRATURE).contains(&d.quadrature_points) {
-        p.push(
-            "dnurbs.quadrature_points",
-            d.quadrature_points.to_string(),
-            format!("must be in 1..={MAX_QUADRATURE}"),
-        );
+/// The rules of `DnurbsOptions::validate`, with their key paths.
+fn check_dnurbs(d: &DnurbsOptions, p: &mut Problems) {
+    if let Err(DnurbsError::InvalidOption {
+        name,
+        value,
+        reason,
+    }) = d.validate()
+    {
+        p.push(format!("dnurbs.{name}"), value, reason);
     }
 }
 
@@ -745,7 +708,7 @@ fn read_vec3(p: &mut Problems, key: &str, v: &toml::Value) -> Option<[f64; 3]> {
 
 fn initial_spec(
     i: RawInitial,
-    d: &DnurbsSpec,
+    d: &DnurbsOptions,
     info: Option<&GeomInfo>,
     p: &mut Problems,
 ) -> Option<InitialSpec> {
@@ -831,49 +794,53 @@ fn initial_spec(
 
 fn check_simulation(
     s: &SimulationSpec,
-    m: &MaterialSpec,
-    d: &DnurbsSpec,
+    m: &Material,
+    d: &DnurbsOptions,
     info: Option<&GeomInfo>,
     p: &mut Problems,
 ) {
-    p.positive("simulation.dt", s.dt, "the time step");
-    p.positive("simulation.t_end", s.t_end, "the end time");
-    if s.dt > 0.0 && s.t_end > 0.0 && s.dt.is_finite() && s.t_end.is_finite() {
-        let steps = (s.t_end / s.dt).ceil();
-        if steps > MAX_STEPS {
-            p.push(
-                "simulation.t_end",
-                format_f64(s.t_end),
-                format!(
-                    "t_end / dt = {} steps of dt = {}; at most {} are allowed",
-                    format_f64(steps),
-                    format_f64(s.dt),
-                    format_f64(MAX_STEPS)
-                ),
-            );
+    match check_time(s.dt, s.t_end, 0.0) {
+        Ok(()) => {}
+        Err(SimError::InvalidTimeStep { dt }) => {
+            time_problem(p, "simulation.dt", dt, "the time step")
         }
+        Err(SimError::InvalidDuration { t_end }) => {
+            time_problem(p, "simulation.t_end", t_end, "the end time")
+        }
+        Err(SimError::TooManySteps { steps, max, .. }) => p.push(
+            "simulation.t_end",
+            format_f64(s.t_end),
+            format!(
+                "t_end / dt = {} steps of dt = {}; at most {} are allowed",
+                format_f64(steps),
+                format_f64(s.dt),
+                format_f64(max)
+            ),
+        ),
+        Err(other) => p.push("simulation.dt", format_f64(s.dt), other.to_string()),
+    }
+    if s.t_end <= 0.0 && s.dt > 0.0 {
+        time_problem(p, "simulation.t_end", s.t_end, "the end time");
     }
     if s.save_every == 0 {
         p.push("simulation.save_every", "0", "must be at least 1");
     }
-    if s.dnurbs_integrator == DnurbsIntegrator::Modal {
-        if m.gamma != 0.0 {
-            p.push(
-                "simulation.dnurbs_integrator",
-                "\"modal\"",
-                format!(
-                    "the modal solution needs an undamped model, but material.gamma = {}",
-                    format_f64(m.gamma)
-                ),
-            );
-        }
-        if d.weights_as_dofs {
-            p.push(
-                "simulation.dnurbs_integrator",
-                "\"modal\"",
-                "the modal solution needs constant weights (dnurbs.weights_as_dofs = false)",
-            );
-        }
+    if let Some(reason) = nurbspring_dnurbs::integrator_problem(s.dnurbs_integrator, m, d) {
+        p.push(
+            "simulation.dnurbs_integrator",
+            format!("\"{}\"", s.dnurbs_integrator),
+            reason,
+        );
+    }
+    if !MsmModel::INTEGRATORS.contains(&s.msm_integrator) {
+        p.push(
+            "simulation.msm_integrator",
+            format!("\"{}\"", s.msm_integrator),
+            format!(
+                "not an integrator of the mass-spring model; expected one of {}",
+                nurbspring_dnurbs::integrator_names(&MsmModel::INTEGRATORS)
+            ),
+        );
     }
     if s.probes.len() > MAX_ITEMS {
         p.push(
@@ -899,68 +866,66 @@ fn check_simulation(
     }
 }
 
-fn check_msm(m: &MsmSpec, info: Option<&GeomInfo>, p: &mut Problems) {
-    for (key, v) in [
-        ("msm.k_edge", m.k_edge),
-        ("msm.k_diag", m.k_diag),
-        ("msm.k_bend", m.k_bend),
-    ] {
-        p.nonnegative(key, v, "spring constants");
+/// A time value refused by `check_time`: not finite, or not positive.
+fn time_problem(p: &mut Problems, key: &str, value: f64, what: &str) {
+    if value.is_finite() {
+        p.push(key, format_f64(value), format!("{what} must be positive"));
+    } else {
+        p.push(key, format_f64(value), "must be a finite number");
     }
-    p.positive("msm.mass", m.mass, "the node mass");
-    p.nonnegative("msm.damping", m.damping, "the damping coefficient");
-    if p.finite("msm.pre_strain", m.pre_strain) && !(m.pre_strain > -1.0 && m.pre_strain < 1.0) {
-        p.push(
-            "msm.pre_strain",
-            format_f64(m.pre_strain),
-            "must lie in (-1, 1)",
-        );
-    }
-    if !m.structural && !m.shear && !m.bending {
-        p.push(
-            "msm.structural",
-            "false",
-            "structural, shear and bending are all false: the lattice has no springs",
-        );
-    }
-    let surface = info.is_none_or(|g| g.surface);
-    if m.grid == LatticeGrid::Uniform {
-        if m.nodes_u < 2 {
-            p.push(
-                "msm.nodes_u",
-                m.nodes_u.to_string(),
-                "a uniform lattice needs at least 2 nodes along u",
-            );
-        }
-        if surface && m.nodes_v < 2 {
-            p.push(
-                "msm.nodes_v",
-                m.nodes_v.to_string(),
-                "a uniform lattice needs at least 2 nodes along v",
-            );
+}
+
+fn check_msm(m: &MsmSpec, loads: &LoadsSpec, info: Option<&GeomInfo>, p: &mut Problems) {
+    for e in build::lattice_options(m, loads.gravity).problems() {
+        match e {
+            MsmError::InvalidOption { name, value, rule } => {
+                let key = match name.strip_prefix("gravity") {
+                    Some(rest) => format!("loads.gravity{rest}"),
+                    None => format!("msm.{name}"),
+                };
+                p.push(key, format_f64(value), rule);
+            }
+            MsmError::NoSprings => p.push(
+                "msm.structural",
+                "false",
+                "structural, shear and bending are all false: the lattice has no springs",
+            ),
+            other => p.push("msm", "", other.to_string()),
         }
     }
     let Some(g) = info else { return };
-    let (lu, lv) = match m.grid {
-        LatticeGrid::Knots => (g.distinct_u, if g.surface { g.distinct_v } else { 1 }),
-        LatticeGrid::Greville => (g.n_u, g.n_v),
-        LatticeGrid::Uniform => (m.nodes_u, if g.surface { m.nodes_v } else { 1 }),
-    };
-    match lu.checked_mul(lv) {
-        Some(n) if n <= MAX_ITEMS => {}
-        _ => {
+    let (lu, lv) = match build::lattice_shape(&build::parameter_grid(m), &g.geometry) {
+        Ok(shape) => shape,
+        Err(MsmError::InvalidOption { name, value, rule }) => {
+            if name != "nodes_v" || g.surface {
+                p.push(format!("msm.{name}"), format_f64(value), rule);
+            }
+            return;
+        }
+        Err(MsmError::TooLarge { nodes }) => {
             p.push(
                 if m.grid == LatticeGrid::Uniform {
                     "msm.nodes_u"
                 } else {
                     "msm.grid"
                 },
-                format!("{lu} x {lv} nodes"),
-                format!("the lattice would have more than {MAX_ITEMS} nodes"),
+                if m.grid == LatticeGrid::Uniform && g.surface {
+                    format!("{} x {} nodes", m.nodes_u, m.nodes_v)
+                } else {
+                    format!("{nodes} nodes")
+                },
+                format!(
+                    "the lattice would have more than {} nodes",
+                    nurbspring_msm::MAX_NODES
+                ),
             );
             return;
         }
-    }
+        Err(other) => {
+            p.push("msm.grid", "", other.to_string());
+            return;
+        }
+    };
     if let MsmFixed::Nodes(nodes) = &m.fixed {
         for (k, idx) in nodes.iter().enumerate() {
             let key = format!("msm.fixed[{k}]");

@@ -340,7 +340,7 @@ mod tests {
                 ),
                 t => format!("{base}[{t}]\nzzz_bogus = 1\n"),
             };
-            let err = crate::scene::Scene::from_str(&text, "t.toml")
+            let err = crate::Scene::from_str(&text, "t.toml")
                 .unwrap_err()
                 .to_string();
             let want = if table.is_empty() {

@@ -3,7 +3,10 @@
 
 use std::path::{Path, PathBuf};
 
-use nurbspring_io::scene::*;
+use nurbspring_derive::{FitDofs, FitMethod};
+use nurbspring_dnurbs::{DnurbsOptions, Integration, Material, RestShape};
+use nurbspring_scene::*;
+use nurbspring_sim::IntegratorKind;
 use proptest::prelude::*;
 
 fn data(name: &str) -> PathBuf {
@@ -71,10 +74,10 @@ fn paper_scene_is_read_as_in_spec() {
     assert_eq!((scene.simulation.dt, scene.simulation.t_end), (0.08, 4.0));
     assert_eq!(
         scene.simulation.dnurbs_integrator,
-        DnurbsIntegrator::TerzopoulosQin
+        IntegratorKind::TerzopoulosQin
     );
     assert_eq!(
-        scene.simulation.msm_integrator.kind(),
+        scene.simulation.msm_integrator,
         nurbspring_sim::IntegratorKind::SymplecticEuler
     );
     assert_eq!(
@@ -122,11 +125,11 @@ fn defaults_apply_to_missing_sections() {
     let text =
         "[curve]\ndegree = 1\nknots = [0, 0, 1, 1]\ncontrol_points = [[0, 0, 0], [1, 0, 0]]\n";
     let scene = Scene::from_str(text, "c.toml").unwrap();
-    assert_eq!(scene.material, MaterialSpec::default());
+    assert_eq!(scene.material, Material::default());
     assert_eq!(scene.material.mu, 1.0);
     assert!(scene.constraints.fixed_weights);
     assert_eq!(scene.dnurbs.quadrature_points, 4);
-    assert_eq!(scene.dnurbs.integrate_over, IntegrationDomain::Parameter);
+    assert_eq!(scene.dnurbs.integration, Integration::Parameter);
     assert_eq!(scene.dnurbs.rest_shape, RestShape::Initial);
     assert_eq!(scene.simulation, SimulationSpec::default());
     assert_eq!(scene.msm, MsmSpec::default());
@@ -373,7 +376,7 @@ fn unknown_value_with_suggestion() {
         "ok.toml",
     )
     .unwrap();
-    assert_eq!(s.simulation.msm_integrator, MsmIntegrator::Verlet);
+    assert_eq!(s.simulation.msm_integrator, IntegratorKind::VelocityVerlet);
 }
 
 #[test]
@@ -860,12 +863,12 @@ fn curve() -> impl Strategy<Value = CurveSpec> {
         })
 }
 
-fn material() -> impl Strategy<Value = MaterialSpec> {
+fn material() -> impl Strategy<Value = Material> {
     (
         0.01f64..100.0,
         proptest::collection::vec(prop_oneof![Just(0.0), 0.0f64..10.0], 6),
     )
-        .prop_map(|(mu, v)| MaterialSpec {
+        .prop_map(|(mu, v)| Material {
             mu,
             gamma: v[0],
             alpha11: v[1],
@@ -918,11 +921,11 @@ fn scene() -> impl Strategy<Value = Scene> {
                 material.beta22 = 0.0;
             }
             let dnurbs_integrator = [
-                DnurbsIntegrator::TerzopoulosQin,
-                DnurbsIntegrator::Newmark,
-                DnurbsIntegrator::Modal,
+                IntegratorKind::TerzopoulosQin,
+                IntegratorKind::Newmark,
+                IntegratorKind::Modal,
             ][dn];
-            if dnurbs_integrator == DnurbsIntegrator::Modal {
+            if dnurbs_integrator == IntegratorKind::Modal {
                 material.gamma = 0.0;
             }
             let (n_u, n_v) = geometry.net_dims();
@@ -949,14 +952,14 @@ fn scene() -> impl Strategy<Value = Scene> {
                     fixed_rings,
                     ..ConstraintsSpec::default()
                 },
-                dnurbs: DnurbsSpec {
+                dnurbs: DnurbsOptions {
                     quadrature_points: quadrature,
-                    integrate_over: if nonneg {
-                        IntegrationDomain::Area
+                    integration: if nonneg {
+                        Integration::Area
                     } else {
-                        IntegrationDomain::Parameter
+                        Integration::Parameter
                     },
-                    ..DnurbsSpec::default()
+                    ..DnurbsOptions::default()
                 },
                 initial: InitialSpec {
                     velocity,
@@ -967,9 +970,9 @@ fn scene() -> impl Strategy<Value = Scene> {
                     t_end,
                     dnurbs_integrator,
                     msm_integrator: [
-                        MsmIntegrator::SymplecticEuler,
-                        MsmIntegrator::Rk4,
-                        MsmIntegrator::BackwardEuler,
+                        IntegratorKind::SymplecticEuler,
+                        IntegratorKind::Rk4,
+                        IntegratorKind::BackwardEuler,
                     ][mi],
                     save_every,
                     probes,

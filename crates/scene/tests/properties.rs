@@ -1,10 +1,8 @@
 //! Property test over random valid and invalid scenes (the CI counterpart of the fuzz targets
 //! in `fuzz/`): parsing, validation, conversion, a few steps of each model and the fit set-up
-//! never panic; every refusal is an input error (exit code 2) or a run failure (exit code 1).
+//! never panic; every refusal is an error with a message.
 
-use nurbspring::commands::simulate::MsmOverrides;
-use nurbspring::convert;
-use nurbspring_io::scene::Scene;
+use nurbspring_scene::{MsmOverrides, Scene};
 use nurbspring_sim::{IntegratorKind, RunOptions, Sample, simulate};
 use proptest::prelude::*;
 
@@ -166,33 +164,38 @@ fn exercise(text: &str) {
             return;
         }
     };
-    let model = match convert::dnurbs_model(&scene) {
+    let model = match scene.build_dnurbs() {
         Ok(m) => m,
-        Err(f) => {
-            assert!(f.code == 1 || f.code == 2);
+        Err(e) => {
+            assert!(!e.to_string().is_empty());
             return;
         }
     };
     let dt = scene.simulation.dt;
-    let initial = convert::dnurbs_initial_state(&scene, &model).unwrap();
+    let initial = scene.initial_conditions().state(&model);
     for kind in [IntegratorKind::TerzopoulosQin, IntegratorKind::Newmark] {
         let opts = RunOptions::new(dt, 3.0 * dt, kind);
-        let _ = simulate(&model, initial.clone(), &opts, &mut |_: &Sample<'_>| {});
+        let _ = model.simulate(initial.clone(), &opts, &mut |_: &Sample<'_>| {});
     }
-    match convert::msm_model_from_scene(&scene, &MsmOverrides::default()) {
-        Ok((msm, state, _)) => {
+    match scene.msm_setup(&MsmOverrides::default()) {
+        Ok(setup) => {
             for kind in [
                 IntegratorKind::SymplecticEuler,
                 IntegratorKind::BackwardEuler,
             ] {
                 let mut opts = RunOptions::new(dt, 3.0 * dt, kind);
                 opts.force_unstable = true;
-                let _ = simulate(&msm, state.clone(), &opts, &mut |_: &Sample<'_>| {});
+                let _ = simulate(
+                    &setup.model,
+                    setup.initial.clone(),
+                    &opts,
+                    &mut |_: &Sample<'_>| {},
+                );
             }
         }
-        Err(f) => assert!(f.code == 1 || f.code == 2),
+        Err(e) => assert!(!e.to_string().is_empty()),
     }
-    if let Ok(config) = convert::experiment(&scene)
+    if let Ok(config) = scene.derivation_config()
         && let Ok(setup) = nurbspring_derive::Setup::new(&config)
     {
         let _ = setup.solve(nurbspring_derive::FitDofs::All, false);

@@ -1,5 +1,5 @@
 //! Scene files: TOML describing the geometry, material, loads, constraints, initial state,
-//! simulation, lattice and fit (every key is listed in `crates/io/SCENE_KEYS.md`).
+//! simulation, lattice and fit (every key is listed in `docs/scenes.md`).
 //!
 //! Reading a scene checks everything up front: TOML syntax and unknown keys (with the file, line
 //! and column, and the nearest valid key), then every value (finite numbers, signs, shapes of
@@ -8,7 +8,7 @@
 //! found are reported together.
 //!
 //! ```
-//! use nurbspring_io::scene::{GeometrySpec, Scene, SceneErrorKind};
+//! use nurbspring_scene::{GeometrySpec, Scene, SceneErrorKind};
 //! let text = r#"
 //! [curve]
 //! degree = 2
@@ -28,115 +28,20 @@
 //! assert_eq!(err.to_string(), "x.toml: material.mu = -2: the mass density must be positive");
 //! ```
 
-mod error;
-mod parse;
-mod spec;
-mod validate;
-
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use nurbspring_dnurbs::{DnurbsOptions, Material};
+use serde::Serialize;
 
-pub use error::{Problem, SceneError, SceneErrorKind};
-pub use spec::{
-    Component, ConstraintsSpec, CurveSpec, DnurbsIntegrator, DnurbsSpec, FitDofs, FitMethod,
-    FitSpec, GeometrySpec, InitialSpec, IntegrationDomain, LatticeGrid, LinearConstraintSpec,
-    LinearTermSpec, LoadsSpec, MassMethod, MaterialSpec, MsmFixed, MsmIntegrator, MsmSpec,
-    OutputSpec, PointLoadSpec, RestShape, SimulationSpec, SurfaceSpec,
-};
+use crate::spec::*;
+use crate::{Problem, SceneError, parse, validate};
 
-/// Largest number of control points, lattice nodes or array entries a scene may ask for
-/// (10⁷); larger requests are refused before anything is allocated.
-pub const MAX_ITEMS: usize = 10_000_000;
+/// The paper's experiment (Section IV), the same text as `examples/paper.toml`.
+pub const PAPER_SCENE: &str = include_str!("../../../examples/paper.toml");
 
 /// Largest scene file read (64 MiB).
 pub const MAX_FILE_BYTES: u64 = 64 << 20;
-
-/// A validated scene.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Scene {
-    /// The file it came from (used in messages).
-    pub path: PathBuf,
-    /// `[surface]` or `[curve]`.
-    pub geometry: GeometrySpec,
-    /// `[material]`.
-    pub material: MaterialSpec,
-    /// `[loads]`.
-    pub loads: LoadsSpec,
-    /// `[constraints]`.
-    pub constraints: ConstraintsSpec,
-    /// `[dnurbs]`.
-    pub dnurbs: DnurbsSpec,
-    /// `[initial]`.
-    pub initial: InitialSpec,
-    /// `[simulation]`.
-    pub simulation: SimulationSpec,
-    /// `[msm]`.
-    pub msm: MsmSpec,
-    /// `[fit]`.
-    pub fit: FitSpec,
-    /// `[output]`.
-    pub output: OutputSpec,
-}
-
-/// The file as deserialized, before validation.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawScene {
-    surface: Option<RawSurface>,
-    curve: Option<RawCurve>,
-    #[serde(default)]
-    material: MaterialSpec,
-    #[serde(default)]
-    loads: LoadsSpec,
-    #[serde(default)]
-    constraints: ConstraintsSpec,
-    #[serde(default)]
-    dnurbs: DnurbsSpec,
-    #[serde(default)]
-    initial: RawInitial,
-    #[serde(default)]
-    simulation: SimulationSpec,
-    #[serde(default)]
-    msm: MsmSpec,
-    #[serde(default)]
-    fit: FitSpec,
-    #[serde(default)]
-    output: OutputSpec,
-}
-
-/// `[surface]` with points as plain lists, so that their shapes are checked with key paths.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawSurface {
-    degree_u: usize,
-    degree_v: usize,
-    knots_u: Vec<f64>,
-    knots_v: Vec<f64>,
-    control_points: Vec<Vec<Vec<f64>>>,
-    #[serde(default)]
-    weights: Option<Vec<Vec<f64>>>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawCurve {
-    degree: usize,
-    knots: Vec<f64>,
-    control_points: Vec<Vec<f64>>,
-    #[serde(default)]
-    weights: Option<Vec<f64>>,
-}
-
-#[derive(Deserialize, Serialize, Default)]
-#[serde(default, deny_unknown_fields)]
-struct RawInitial {
-    velocity: [f64; 3],
-    weight_velocity: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    velocities: Option<toml::Value>,
-    displacement: [f64; 3],
-}
 
 /// The file as serialized by [`Scene::to_toml`].
 #[derive(Serialize)]
@@ -145,10 +50,10 @@ struct OutScene<'a> {
     surface: Option<&'a SurfaceSpec>,
     #[serde(skip_serializing_if = "Option::is_none")]
     curve: Option<&'a CurveSpec>,
-    material: &'a MaterialSpec,
+    material: &'a Material,
     loads: &'a LoadsSpec,
     constraints: &'a ConstraintsSpec,
-    dnurbs: &'a DnurbsSpec,
+    dnurbs: &'a DnurbsOptions,
     initial: RawInitial,
     simulation: &'a SimulationSpec,
     msm: &'a MsmSpec,
@@ -157,26 +62,18 @@ struct OutScene<'a> {
 }
 
 impl Scene {
-    /// Reads and validates a scene file.
+    /// Reads and validates a scene file: a regular file of at most [`MAX_FILE_BYTES`], read
+    /// through its handle (a FIFO, a device or a folder is refused, and nothing is read past
+    /// the limit).
     pub fn from_path(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let io = |source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        let len = std::fs::metadata(path).map_err(io)?.len();
-        if len > MAX_FILE_BYTES {
-            return Err(SceneError::Invalid {
-                path: path.to_path_buf(),
-                problems: vec![Problem::new(
-                    "(file size)",
-                    format!("{len} bytes"),
-                    format!("scene files are limited to {MAX_FILE_BYTES} bytes"),
-                )],
-            });
-        }
-        let text = std::fs::read_to_string(path).map_err(io)?;
+        let text = read_text(path, MAX_FILE_BYTES, "scene")?;
         Scene::from_str(&text, path)
+    }
+
+    /// The paper's scene ([`PAPER_SCENE`]), named `<built-in paper scene>` in messages.
+    pub fn paper() -> Result<Scene, SceneError> {
+        Scene::from_str(PAPER_SCENE, "<built-in paper scene>")
     }
 
     /// Parses and validates scene text; `path` is used in messages and stored in the scene.
@@ -276,4 +173,44 @@ impl CurveSpec {
             problems: vec![p],
         })
     }
+}
+
+/// Reads a text file of at most `limit` bytes through its handle: regular files only, at most
+/// `limit + 1` bytes read, UTF-8 required. `what` names the file in messages ("scene").
+pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, SceneError> {
+    let io = |source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let invalid = |value: String, message: String| SceneError::Invalid {
+        path: path.to_path_buf(),
+        problems: vec![Problem::new("(file)", value, message)],
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if !meta.is_file() {
+        let kind = if meta.is_dir() {
+            "a folder"
+        } else {
+            "not a regular file (a FIFO, socket or device)"
+        };
+        return Err(invalid(
+            kind.to_string(),
+            format!("a {what} file must be a regular file"),
+        ));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(invalid(
+            format!("more than {limit} bytes"),
+            format!("{what} files are limited to {limit} bytes"),
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        invalid(
+            format!("invalid UTF-8 at byte {}", e.utf8_error().valid_up_to()),
+            format!("a {what} file must be UTF-8 text"),
+        )
+    })
 }

@@ -1,0 +1,568 @@
+//! The derivation of the paper's Section III as a pipeline of named steps over typed values:
+//! [`fit_step`] (eq. (15), every reading) → [`reference_run`] (the D-NURBS) → [`mass_step`]
+//! (the eigenvalue scan) → [`evaluate`] (stability, residuals and the side-by-side run of
+//! Figure 3) → [`spectra`]. [`derive_msm`] runs them in order.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use nurbspring_msm::{Class, Constants, MsmModel, SpringLattice};
+use nurbspring_sim::{DynamicModel, IntegratorKind};
+use serde::Serialize;
+
+use crate::DeriveError;
+use crate::fit::FitDofs;
+use crate::fit::FitResult;
+use crate::mass::mass_eigenvalues;
+use crate::setup::{Config, FitMethod, FitOptions, MassChoice, Setup};
+use crate::validation::{Comparison, Trajectory, compare};
+
+/// The reading of eq. (15) the derived MSM uses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SelectedReading {
+    /// Dofs entering the fit.
+    pub dofs: FitDofs,
+    /// `k ≥ 0` imposed.
+    pub nonnegative: bool,
+    /// Solver.
+    pub method: FitMethod,
+    /// When `k ≥ 0` was imposed because the unconstrained optimum has negative constants
+    /// (no spring can have one): those constants.
+    pub imposed_by: Vec<(Class, f64)>,
+}
+
+impl std::fmt::Display for SelectedReading {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} dofs, {}, {}",
+            self.dofs.name(),
+            if self.nonnegative {
+                "k >= 0"
+            } else {
+                "unconstrained"
+            },
+            self.method.label()
+        )?;
+        if !self.imposed_by.is_empty() {
+            let list: Vec<String> = self
+                .imposed_by
+                .iter()
+                .map(|(c, k)| format!("{} = {k:.6}", c.symbol()))
+                .collect();
+            write!(
+                f,
+                " (k >= 0 imposed because the unconstrained fit gives {}, which no spring can have)",
+                list.join(", ")
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// The four readings of eq. (15) plus the trust-region check.
+#[derive(Clone, Debug, Serialize)]
+pub struct FitReport {
+    /// Classes fitted.
+    pub classes: Vec<Class>,
+    /// Every dof, unconstrained (the literal equation).
+    pub all_dofs: FitResult,
+    /// Free dofs only, unconstrained.
+    pub free_dofs: FitResult,
+    /// Every dof, `k ≥ 0`.
+    pub all_dofs_nonnegative: FitResult,
+    /// Free dofs only, `k ≥ 0`.
+    pub free_dofs_nonnegative: FitResult,
+    /// The trust-region solution for the selected reading and its agreement with the closed form.
+    pub trust_region: TrustRegionReport,
+    /// The reading used for the derived MSM, in words.
+    pub selected_reading: String,
+    /// The constants used for the derived MSM.
+    pub selected: FitResult,
+}
+
+/// The trust-region solve of the selected reading.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrustRegionReport {
+    /// Its constants.
+    pub result: FitResult,
+    /// Iterations.
+    pub iterations: usize,
+    /// Largest relative difference to the closed form.
+    pub max_relative_difference_to_closed_form: f64,
+}
+
+/// One mass candidate of the scan.
+#[derive(Clone, Debug, Serialize)]
+pub struct MassCandidate {
+    /// Node mass tried.
+    pub m: f64,
+    /// RMS of the central-node z difference to the D-NURBS run (∞ when the MSM run failed).
+    pub rms: f64,
+    /// Max abs of that difference.
+    pub max_abs: f64,
+    /// Integrator used for this candidate.
+    pub integrator: IntegratorKind,
+    /// Why the run stopped early, if it did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
+}
+
+/// The mass step.
+#[derive(Clone, Debug, Serialize)]
+pub struct MassReport {
+    /// Distinct non-null eigenvalues of the full M, ascending.
+    pub eigenvalues: Vec<f64>,
+    /// Distinct eigenvalues of M restricted to the free dofs, ascending.
+    pub eigenvalues_free_dofs: Vec<f64>,
+    /// Every candidate tried with its error.
+    pub candidates: Vec<MassCandidate>,
+    /// The mass selected (smallest RMS among the runs that finished).
+    pub selected: f64,
+    /// How it was chosen.
+    pub rule: String,
+}
+
+/// Stability, residuals and validation of an MSM parameter set.
+#[derive(Clone, Debug, Serialize)]
+pub struct ParameterSet {
+    /// The constants (`k_edge`, `k_diag`, `k_bend` in files).
+    #[serde(flatten)]
+    pub constants: Constants,
+    /// Node mass.
+    pub m: f64,
+    /// ω_max of the linearized MSM at rest.
+    pub omega_max: f64,
+    /// Explicit stability limit 2/ω_max.
+    pub dt_critical: f64,
+    /// Whether the scene's Δt exceeds it.
+    pub dt_exceeds_explicit_limit: bool,
+    /// Relative residual of eq. (15), every dof.
+    pub relative_residual_all_dofs: f64,
+    /// Relative residual of eq. (15), free dofs.
+    pub relative_residual_free_dofs: f64,
+    /// Central node z: comparison with the D-NURBS run, with the scene's MSM integrator when
+    /// it is stable at the scene's Δt, Newmark otherwise.
+    pub validation: ValidationReport,
+    /// When the scene's integrator is explicit and Δt exceeds its limit: what that run does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub explicit_run: Option<ValidationReport>,
+}
+
+/// Figure 3 numbers.
+#[derive(Clone, Debug, Serialize)]
+pub struct ValidationReport {
+    /// Integrator of the MSM run.
+    pub integrator: IntegratorKind,
+    /// RMS of the central node's z difference.
+    pub rms: f64,
+    /// Max abs of that difference.
+    pub max_abs: f64,
+    /// RMS relative to the D-NURBS amplitude.
+    pub relative_rms: f64,
+    /// D-NURBS central-node amplitude `max |z − z₀|`.
+    pub dnurbs_amplitude: f64,
+    /// Dominant period of the D-NURBS central node.
+    pub dnurbs_period: Option<f64>,
+    /// Dominant period of the MSM central node.
+    pub msm_period: Option<f64>,
+    /// Samples compared.
+    pub samples: usize,
+    /// Why the MSM run stopped early, if it did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub msm_stopped: Option<String>,
+}
+
+impl ValidationReport {
+    fn new(integrator: IntegratorKind, c: &Comparison, stopped: Option<String>) -> Self {
+        Self {
+            integrator,
+            rms: c.rms,
+            max_abs: c.max_abs,
+            relative_rms: c.relative_rms,
+            dnurbs_amplitude: c.reference_amplitude,
+            dnurbs_period: c.reference_period,
+            msm_period: c.other_period,
+            samples: c.samples,
+            msm_stopped: stopped,
+        }
+    }
+}
+
+/// Angular frequencies (rad/s) of the constrained D-NURBS and of the derived MSM linearized at
+/// rest, lowest first (the MSM's zero frequencies are its directions without linear stiffness).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Spectrum {
+    /// D-NURBS: `K φ = ω² M φ` on the free dofs.
+    pub dnurbs: Vec<f64>,
+    /// MSM: `K_T φ = ω² M_S φ` on the free node dofs.
+    pub msm: Vec<f64>,
+}
+
+/// Result of [`derive_msm`].
+#[derive(Clone, Debug)]
+pub struct Derivation {
+    /// The derived lattice (fitted constants, selected mass, the scene's damping).
+    pub lattice: SpringLattice,
+    /// Fit step.
+    pub fit: FitReport,
+    /// Mass step.
+    pub mass: MassReport,
+    /// The derived parameters with their stability and validation.
+    pub derived: ParameterSet,
+    /// The scene's own parameters, evaluated the same way.
+    pub given: Option<ParameterSet>,
+    /// The MSM run with the scene's own parameters.
+    pub given_trajectory: Option<Trajectory>,
+    /// Probe parameters `(u, v)`, the centre first.
+    pub probes: Vec<(f64, f64)>,
+    /// Lattice node of each probe.
+    pub probe_nodes: Vec<usize>,
+    /// The D-NURBS run.
+    pub dnurbs_trajectory: Trajectory,
+    /// The derived MSM run.
+    pub msm_trajectory: Trajectory,
+    /// Initial node velocities `Ω ṗ(0)` (eq. 18), per node.
+    pub node_velocities: Vec<[f64; 3]>,
+    /// Angular frequencies of both linearized models, lowest first.
+    pub spectrum: Spectrum,
+}
+
+/// Largest model whose full spectrum is reported (dense eigenproblems).
+const MAX_SPECTRUM_DOFS: usize = 1500;
+
+/// Eigenvalues below this fraction of the largest count as zero frequencies.
+const ZERO_EIGENVALUE: f64 = 1e-12;
+
+/// Step 1, eq. (15) under its four readings, then the selected one (closed form or trust
+/// region). A spring cannot have a negative constant: when the unconstrained optimum of the
+/// selected dofs has one, the derived MSM uses the `k ≥ 0` optimum, and the reading says so.
+pub fn fit_step(setup: &Setup, options: &FitOptions) -> Result<FitReport, DeriveError> {
+    let all_dofs = setup.solve(FitDofs::All, false)?;
+    let free_dofs = setup.solve(FitDofs::Free, false)?;
+    let all_dofs_nonnegative = setup.solve(FitDofs::All, true)?;
+    let free_dofs_nonnegative = setup.solve(FitDofs::Free, true)?;
+    let (unconstrained, constrained) = match options.dofs {
+        FitDofs::All => (&all_dofs, &all_dofs_nonnegative),
+        FitDofs::Free => (&free_dofs, &free_dofs_nonnegative),
+    };
+    let negative: Vec<(Class, f64)> = unconstrained
+        .constants
+        .iter()
+        .filter(|&(_, k)| k < 0.0)
+        .collect();
+    let nonnegative = options.nonnegative || !negative.is_empty();
+    let selected_closed = if nonnegative {
+        constrained.clone()
+    } else {
+        unconstrained.clone()
+    };
+    let fit = setup.fit(options.dofs);
+    let start = vec![1.0; fit.classes().len()];
+    let tr = fit.trust_region(&start, nonnegative, 500)?;
+    let tr_result = FitResult {
+        constants: fit.constants(&tr.k),
+        relative_residual: fit.relative_residual(&tr.k)?,
+    };
+    let max_rel = fit
+        .classes()
+        .iter()
+        .map(|&c| {
+            let (a, b) = (
+                tr_result.constants.value(c),
+                selected_closed.constants.value(c),
+            );
+            (a - b).abs() / b.abs().max(1e-300)
+        })
+        .fold(0.0, f64::max);
+    let selected = match options.method {
+        FitMethod::ClosedForm => selected_closed,
+        FitMethod::TrustRegion => tr_result.clone(),
+    };
+    let reading = SelectedReading {
+        dofs: options.dofs,
+        nonnegative,
+        method: options.method,
+        imposed_by: if options.nonnegative {
+            Vec::new()
+        } else {
+            negative
+        },
+    };
+    Ok(FitReport {
+        classes: fit.classes().to_vec(),
+        all_dofs,
+        free_dofs,
+        all_dofs_nonnegative,
+        free_dofs_nonnegative,
+        trust_region: TrustRegionReport {
+            result: tr_result,
+            iterations: tr.iterations,
+            max_relative_difference_to_closed_form: max_rel,
+        },
+        selected_reading: reading.to_string(),
+        selected,
+    })
+}
+
+/// Step 2, the D-NURBS reference run with the scene's integrator and time settings.
+pub fn reference_run(
+    setup: &Setup,
+    config: &Config,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<Trajectory, DeriveError> {
+    setup.run_dnurbs(
+        config.time.dnurbs_integrator,
+        config.time.dt,
+        config.time.t_end,
+        cancel,
+    )
+}
+
+/// The integrator to use for a candidate: the scene's, unless it is explicit and Δt is above
+/// its stability limit, in which case Newmark (implicit, energy conserving) is used instead.
+fn stable_integrator(requested: IntegratorKind, dt: f64, dt_critical: f64) -> IntegratorKind {
+    if requested.is_explicit() && dt >= dt_critical {
+        IntegratorKind::Newmark
+    } else {
+        requested
+    }
+}
+
+/// Step 3, the mass of Section III: the distinct non-null eigenvalues of M, and unless the
+/// scene fixes the mass, the candidate loop (each candidate simulated and compared with the
+/// D-NURBS on the central node's z; the smallest RMS among the runs that finished wins).
+pub fn mass_step(
+    setup: &Setup,
+    config: &Config,
+    constants: &Constants,
+    dnurbs: &Trajectory,
+    cancel: Option<Arc<AtomicBool>>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<MassReport, DeriveError> {
+    let eigenvalues = mass_eigenvalues(&setup.model().matrices().mass)?;
+    let eigenvalues_free_dofs = mass_eigenvalues(setup.model().reduced_mass())?;
+    let (candidates, selected, rule) = match config.fit.mass {
+        MassChoice::Fixed(m) => (Vec::new(), m, format!("fixed by the scene: m = {m}")),
+        MassChoice::EigenvalueScan => {
+            let take = match config.fit.max_candidates {
+                0 => eigenvalues.len(),
+                n => n,
+            };
+            let list: Vec<f64> = eigenvalues.iter().copied().take(take).collect();
+            let candidates =
+                mass_candidates(setup, config, constants, &list, dnurbs, cancel, progress)?;
+            let best = candidates
+                .iter()
+                .filter(|c| c.rms.is_finite())
+                .min_by(|a, b| a.rms.total_cmp(&b.rms))
+                .map(|c| c.m)
+                .ok_or_else(|| DeriveError::NoMassCandidate {
+                    tried: candidates.len(),
+                    first: candidates
+                        .first()
+                        .and_then(|c| c.stopped.clone())
+                        .unwrap_or_else(|| "M has no non-null eigenvalue".to_string()),
+                })?;
+            (
+                candidates,
+                best,
+                "every distinct non-null eigenvalue of M tried, smallest first; the one with the smallest RMS error of the central node's z against the D-NURBS run is kept".to_string(),
+            )
+        }
+    };
+    Ok(MassReport {
+        eigenvalues,
+        eigenvalues_free_dofs,
+        candidates,
+        selected,
+        rule,
+    })
+}
+
+/// The candidate loop: simulates the MSM with `m = λ` for each candidate. Each run uses the
+/// scene's integrator when it is stable at Δt, Newmark otherwise (recorded per candidate).
+fn mass_candidates(
+    setup: &Setup,
+    config: &Config,
+    constants: &Constants,
+    masses: &[f64],
+    dnurbs: &Trajectory,
+    cancel: Option<Arc<AtomicBool>>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<MassCandidate>, DeriveError> {
+    let z_ref = dnurbs.component(0, 2);
+    let mut out = Vec::with_capacity(masses.len());
+    for (i, &m) in masses.iter().enumerate() {
+        if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return Err(DeriveError::Cancelled);
+        }
+        let (_, dt_crit) = setup.stability(constants, m)?;
+        let integrator = stable_integrator(config.time.msm_integrator, config.time.dt, dt_crit);
+        let traj = setup.run_msm(
+            setup.lattice_with(constants, m),
+            integrator,
+            config.time.dt,
+            config.time.t_end,
+            false,
+            cancel.clone(),
+        )?;
+        let c = compare(&dnurbs.t, &z_ref, &traj.component(0, 2));
+        let complete = traj.stopped.is_none() && c.samples == z_ref.len();
+        out.push(MassCandidate {
+            m,
+            rms: if complete { c.rms } else { f64::INFINITY },
+            max_abs: if complete { c.max_abs } else { f64::INFINITY },
+            integrator,
+            stopped: traj.stopped.clone(),
+        });
+        progress(i + 1, masses.len());
+    }
+    Ok(out)
+}
+
+/// Step 4, a parameter set evaluated: stability, residuals and the central-node comparison.
+/// The comparison uses `integrator` when it is stable at the scene's Δt, Newmark otherwise; in
+/// that case the requested explicit run is also made (forced past its limit) and reported in
+/// `explicit_run`, to show what it does.
+pub fn evaluate(
+    setup: &Setup,
+    config: &Config,
+    constants: &Constants,
+    m: f64,
+    integrator: IntegratorKind,
+    dnurbs: &Trajectory,
+) -> Result<(ParameterSet, Trajectory), DeriveError> {
+    let (omega_max, dt_critical) = setup.stability(constants, m)?;
+    let (res_all, res_free) = setup.residuals_at(constants)?;
+    let used = stable_integrator(integrator, config.time.dt, dt_critical);
+    let z_ref = dnurbs.component(0, 2);
+    let run = |kind: IntegratorKind| -> Result<(ValidationReport, Trajectory), DeriveError> {
+        let traj = setup.run_msm(
+            setup.lattice_with(constants, m),
+            kind,
+            config.time.dt,
+            config.time.t_end,
+            true,
+            None,
+        )?;
+        let c = compare(&dnurbs.t, &z_ref, &traj.component(0, 2));
+        Ok((ValidationReport::new(kind, &c, traj.stopped.clone()), traj))
+    };
+    let (validation, traj) = run(used)?;
+    let explicit_run = if used != integrator {
+        Some(run(integrator)?.0)
+    } else {
+        None
+    };
+    Ok((
+        ParameterSet {
+            constants: constants.clone(),
+            m,
+            omega_max,
+            dt_critical,
+            dt_exceeds_explicit_limit: config.time.dt >= dt_critical,
+            relative_residual_all_dofs: res_all,
+            relative_residual_free_dofs: res_free,
+            validation,
+            explicit_run,
+        },
+        traj,
+    ))
+}
+
+/// Step 5, the spectra of both models linearized at rest (empty above
+/// [`MAX_SPECTRUM_DOFS`] free dofs).
+pub fn spectra(setup: &Setup, lattice: &SpringLattice) -> Result<Spectrum, DeriveError> {
+    let model = setup.model();
+    let dnurbs = if model.n_free() <= MAX_SPECTRUM_DOFS {
+        model.modes(model.n_free())?.omega
+    } else {
+        Vec::new()
+    };
+    Ok(Spectrum {
+        dnurbs,
+        msm: msm_spectrum(lattice)?,
+    })
+}
+
+/// Angular frequencies of the MSM linearized at rest, ascending, with exact zeros for the
+/// directions without linear stiffness.
+pub fn msm_spectrum(lattice: &SpringLattice) -> Result<Vec<f64>, DeriveError> {
+    let model = MsmModel::new(lattice.clone())?;
+    let n = model.n_dofs();
+    if n == 0 || n > MAX_SPECTRUM_DOFS {
+        return Ok(Vec::new());
+    }
+    let k = model
+        .tangent_stiffness(model.initial_positions())
+        .to_dense();
+    let m = model.mass().to_sparse().to_dense();
+    let eig = nurbspring_linalg::generalized_symmetric_eigen(&k, &m)?;
+    let scale = eig.values.iter().map(|x| x.abs()).fold(0.0, f64::max);
+    Ok(eig
+        .values
+        .iter()
+        .map(|&l| {
+            if l.abs() <= ZERO_EIGENVALUE * scale {
+                0.0
+            } else {
+                l.max(0.0).sqrt()
+            }
+        })
+        .collect())
+}
+
+/// Derives the MSM that mimics the D-NURBS model (paper Section III) and validates it
+/// (Figure 3): the steps of this module in order. `cancel` stops long runs (Ctrl-C);
+/// `progress(done, total)` reports the mass scan.
+pub fn derive_msm(
+    config: &Config,
+    cancel: Option<Arc<AtomicBool>>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Derivation, Setup), DeriveError> {
+    let setup = Setup::new(config)?;
+    let fit = fit_step(&setup, &config.fit)?;
+    let dnurbs = reference_run(&setup, config, cancel.clone())?;
+    let mass = mass_step(
+        &setup,
+        config,
+        &fit.selected.constants,
+        &dnurbs,
+        cancel,
+        progress,
+    )?;
+    let integrator = config.time.msm_integrator;
+    let (derived, msm_trajectory) = evaluate(
+        &setup,
+        config,
+        &fit.selected.constants,
+        mass.selected,
+        integrator,
+        &dnurbs,
+    )?;
+    let (given, given_trajectory) = match &config.given {
+        Some((constants, m)) => {
+            let (p, t) = evaluate(&setup, config, constants, *m, integrator, &dnurbs)?;
+            (Some(p), Some(t))
+        }
+        None => (None, None),
+    };
+    let lattice = setup.lattice_with(&fit.selected.constants, mass.selected);
+    let spectrum = spectra(&setup, &lattice)?;
+    let derivation = Derivation {
+        lattice,
+        fit,
+        mass,
+        derived,
+        given,
+        given_trajectory,
+        probes: setup.probes().to_vec(),
+        probe_nodes: setup.probe_nodes().to_vec(),
+        dnurbs_trajectory: dnurbs,
+        msm_trajectory,
+        node_velocities: setup.node_velocities().to_vec(),
+        spectrum,
+    };
+    Ok((derivation, setup))
+}

@@ -1,0 +1,282 @@
+//! Scene → models: the geometry, material, loads and constraints of the D-NURBS, the lattice
+//! options of the MSM, the derivation's configuration. Model errors come back as
+//! [`Error::Model`] naming the file and, where one caused it, the key.
+
+use nurbspring_derive::{Config, FitOptions, InitialConditions, MassChoice, TimeSettings};
+use nurbspring_dnurbs::{Constraints, DnurbsModel, Geometry, LinearConstraint, Loads, PointLoad};
+use nurbspring_msm::{
+    Class, Constants, FixedNodes, LatticeOptions, MsmError, ParameterGrid, SpringKind,
+};
+
+use crate::spec::*;
+use crate::{Error, Scene};
+
+/// Spring constants given on top of a scene's or a file's (`--k-edge`, `--mass`, …).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MsmOverrides {
+    /// Constants by class.
+    pub constants: Constants,
+    /// Node mass.
+    pub mass: Option<f64>,
+}
+
+impl MsmOverrides {
+    /// The rules of `LatticeOptions::problems` on the overrides, each problem naming the
+    /// option as `flag(symbol)` (for example `--k-edge`, `--mass`).
+    pub fn validate(&self, flag: &dyn Fn(&str) -> String) -> Result<(), Error> {
+        let options = LatticeOptions {
+            springs: self.constants.clone(),
+            mass: self.mass.unwrap_or(1.0),
+            ..LatticeOptions::default()
+        };
+        for e in options.problems() {
+            if let MsmError::InvalidOption { name, value, rule } = e {
+                return Err(Error::option(&flag(&name), value, rule));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The spring classes of `[msm]` with their constants (the keys are the constants' symbols).
+pub fn spring_constants(m: &MsmSpec) -> Constants {
+    Constants::from_pairs(
+        [
+            (SpringKind::Structural, m.structural, m.k_edge),
+            (SpringKind::Shear, m.shear, m.k_diag),
+            (SpringKind::Bend, m.bending, m.k_bend),
+        ]
+        .into_iter()
+        .filter(|&(_, on, _)| on)
+        .map(|(kind, _, k)| (Class::Spring(kind), k)),
+    )
+}
+
+/// `[msm]` as lattice options (fixed nodes by the automatic rule).
+pub(crate) fn lattice_options(m: &MsmSpec, gravity: [f64; 3]) -> LatticeOptions {
+    LatticeOptions {
+        grid: parameter_grid(m),
+        springs: spring_constants(m),
+        mass: m.mass,
+        damping: m.damping,
+        pre_strain: m.pre_strain,
+        fixed: FixedNodes::Auto,
+        gravity,
+    }
+}
+
+/// `msm.grid` (with `nodes_u`, `nodes_v`).
+pub(crate) fn parameter_grid(m: &MsmSpec) -> ParameterGrid {
+    match m.grid {
+        LatticeGrid::Knots => ParameterGrid::Knots,
+        LatticeGrid::Uniform => ParameterGrid::Uniform {
+            nodes_u: m.nodes_u,
+            nodes_v: m.nodes_v,
+        },
+        LatticeGrid::Greville => ParameterGrid::Greville,
+    }
+}
+
+/// Nodes along u and v of the lattice `grid` gives on `geometry` (`n_v = 1` on a curve).
+pub(crate) fn lattice_shape(
+    grid: &ParameterGrid,
+    geometry: &Geometry,
+) -> Result<(usize, usize), MsmError> {
+    match geometry {
+        Geometry::Surface(s) => {
+            let (us, vs) = grid.parameters(s)?;
+            Ok((us.len(), vs.len()))
+        }
+        Geometry::Curve(c) => Ok((grid.parameters_along(c.basis().knots())?.len(), 1)),
+    }
+}
+
+impl Scene {
+    /// A model error of this scene caused by `key`.
+    pub(crate) fn model_error(
+        &self,
+        key: Option<&str>,
+        e: impl Into<nurbspring_derive::DeriveError>,
+    ) -> Error {
+        Error::model(&self.path, key, e)
+    }
+
+    /// The surface or curve (validated when the scene was read).
+    pub fn build_geometry(&self) -> Result<Geometry, Error> {
+        Ok(match &self.geometry {
+            GeometrySpec::Surface(_) => Geometry::Surface(self.to_surface()?),
+            GeometrySpec::Curve(_) => Geometry::Curve(self.to_curve()?),
+        })
+    }
+
+    /// `[loads]`.
+    pub fn build_loads(&self) -> Loads {
+        let l = &self.loads;
+        Loads {
+            gravity: l.gravity,
+            distributed: l.distributed,
+            point: l
+                .point
+                .iter()
+                .map(|p| PointLoad {
+                    u: p.u,
+                    v: p.v.unwrap_or(0.0),
+                    force: p.force,
+                })
+                .collect(),
+        }
+    }
+
+    /// Flat control point index of `[i, j]` (surfaces) or `[i]` (curves), checked when the
+    /// scene was read.
+    fn point_index(&self, p: &[usize]) -> usize {
+        let (_, n_v) = self.geometry.net_dims();
+        match p {
+            [i, j] => i * n_v + j,
+            [i] => *i,
+            _ => 0,
+        }
+    }
+
+    /// `[constraints]`.
+    pub fn build_constraints(&self) -> Constraints {
+        let c = &self.constraints;
+        let dpp = if self.dnurbs.weights_as_dofs { 4 } else { 3 };
+        Constraints {
+            fixed_points: c.fixed.iter().map(|p| self.point_index(p)).collect(),
+            fixed_rings: c.fixed_rings,
+            fixed_weights: c.fixed_weights,
+            linear: c
+                .linear
+                .iter()
+                .map(|row| LinearConstraint {
+                    terms: row
+                        .terms
+                        .iter()
+                        .map(|t| {
+                            (
+                                self.point_index(&t.point) * dpp + t.component.offset(),
+                                t.coefficient,
+                            )
+                        })
+                        .collect(),
+                    rhs: row.rhs,
+                })
+                .collect(),
+        }
+    }
+
+    /// The constrained D-NURBS model.
+    pub fn build_dnurbs(&self) -> Result<DnurbsModel, Error> {
+        DnurbsModel::new(
+            self.build_geometry()?,
+            self.material.clone(),
+            self.build_loads(),
+            &self.build_constraints(),
+            self.dnurbs.clone(),
+        )
+        .map_err(|e| self.model_error(None, e))
+    }
+
+    /// `[initial]`.
+    pub fn initial_conditions(&self) -> InitialConditions {
+        let i = &self.initial;
+        InitialConditions {
+            velocities: i.velocities.clone().unwrap_or_else(|| vec![i.velocity]),
+            weight_velocity: i.weight_velocity,
+            displacement: i.displacement,
+        }
+    }
+
+    /// `[simulation]` time stepping.
+    pub fn time_settings(&self) -> TimeSettings {
+        let s = &self.simulation;
+        TimeSettings {
+            dt: s.dt,
+            t_end: s.t_end,
+            dnurbs_integrator: s.dnurbs_integrator,
+            msm_integrator: s.msm_integrator,
+        }
+    }
+
+    /// Probe parameters: the centre of the parameter domain first, then the scene's probes
+    /// (duplicates dropped). On a curve `v` is 0.
+    pub fn probe_params(&self) -> Result<Vec<(f64, f64)>, Error> {
+        let ((u0, u1), (v0, v1)) = match self.build_geometry()? {
+            Geometry::Surface(s) => s.domain(),
+            Geometry::Curve(c) => (c.domain(), (0.0, 0.0)),
+        };
+        let mut out = vec![(0.5 * (u0 + u1), 0.5 * (v0 + v1))];
+        for p in &self.simulation.probes {
+            let q = (p[0], p.get(1).copied().unwrap_or(0.0));
+            if !out.contains(&q) {
+                out.push(q);
+            }
+        }
+        Ok(out)
+    }
+
+    /// The lattice options of `[msm]` with `overrides`, fixed nodes as the scene gives them.
+    pub fn lattice_options(&self, overrides: &MsmOverrides) -> Result<LatticeOptions, Error> {
+        let mut options = lattice_options(&self.msm, self.loads.gravity);
+        for (class, k) in overrides.constants.iter() {
+            options.springs.set(class, k);
+        }
+        if let Some(m) = overrides.mass {
+            options.mass = m;
+        }
+        if let MsmFixed::Nodes(list) = &self.msm.fixed {
+            let geometry = self.build_geometry()?;
+            let (_, n_v) = lattice_shape(&options.grid, &geometry)
+                .map_err(|e| self.model_error(Some("msm.grid"), e))?;
+            options.fixed = FixedNodes::List(
+                list.iter()
+                    .map(|node| match node.as_slice() {
+                        [i, j] => i * n_v + j,
+                        [a] => *a,
+                        _ => 0,
+                    })
+                    .collect(),
+            );
+        }
+        Ok(options)
+    }
+
+    /// The derivation's configuration; the scene's `[msm]` constants and mass are kept as the
+    /// "given" parameters, evaluated beside the derived ones.
+    pub fn derivation_config(&self) -> Result<Config, Error> {
+        let Geometry::Surface(surface) = self.build_geometry()? else {
+            return Err(self.model_error(
+                Some("curve"),
+                nurbspring_derive::DeriveError::InvalidOption {
+                    name: "geometry",
+                    value: "[curve]".to_string(),
+                    reason: "deriving a mass-spring model needs a [surface] scene".to_string(),
+                },
+            ));
+        };
+        let fit = &self.fit;
+        Ok(Config {
+            surface,
+            material: self.material.clone(),
+            loads: self.build_loads(),
+            constraints: self.build_constraints(),
+            dnurbs: self.dnurbs.clone(),
+            lattice: self.lattice_options(&MsmOverrides::default())?,
+            initial: self.initial_conditions(),
+            time: self.time_settings(),
+            fit: FitOptions {
+                dofs: fit.dofs,
+                nonnegative: fit.nonnegative,
+                method: fit.method,
+                mass: match fit.mass {
+                    MassMethod::EigenvalueScan => MassChoice::EigenvalueScan,
+                    MassMethod::Fixed => MassChoice::Fixed(self.msm.mass),
+                },
+                max_candidates: fit.max_candidates,
+            },
+            probes: self.probe_params()?,
+            given: Some((spring_constants(&self.msm), self.msm.mass)),
+        })
+    }
+}

@@ -1,0 +1,93 @@
+//! The errors of the scene layer: where (file, key or option), what value, and why; each
+//! answers [`Error::kind`] (bad input, a run failure, or a cancellation).
+
+use std::path::PathBuf;
+
+use nurbspring_derive::DeriveError;
+use nurbspring_io::OutputError;
+use nurbspring_msm::MsmError;
+use nurbspring_sim::ErrorKind;
+
+use crate::SceneError;
+
+/// Everything the scene layer reports.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The scene file: unreadable, TOML syntax or schema, invalid values (all listed).
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// An `msm.json` file that cannot be read or does not describe a valid model.
+    #[error("{}: {source}", path.display())]
+    MsmFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        source: Box<MsmError>,
+    },
+    /// An option given to a command (a command-line flag or an argument of the API).
+    #[error("{name} {value}: {message}")]
+    Option {
+        /// The option, as the user wrote it (`--dt`).
+        name: String,
+        /// Its value.
+        value: String,
+        /// Why it is refused.
+        message: String,
+    },
+    /// Building or running a model of the scene (or msm.json) at `path` failed; `key` is the
+    /// scene key or option that caused it, when known.
+    #[error("{}: {}{source}", path.display(), key.as_ref().map(|k| format!("{k}: ")).unwrap_or_default())]
+    Model {
+        /// The scene or msm.json file.
+        path: PathBuf,
+        /// The key or option behind it.
+        key: Option<String>,
+        /// The model's error.
+        source: Box<DeriveError>,
+    },
+    /// Writing an output failed.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    /// The work was interrupted (Ctrl-C or a signal).
+    #[error("interrupted")]
+    Cancelled,
+}
+
+impl Error {
+    /// Input, Run or Cancelled.
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            Error::Scene(_) | Error::Option { .. } => ErrorKind::Input,
+            Error::MsmFile { source, .. } => source.kind(),
+            Error::Model { source, .. } => source.kind(),
+            Error::Output(_) => ErrorKind::Run,
+            Error::Cancelled => ErrorKind::Cancelled,
+        }
+    }
+
+    /// A model error of the file `path`, caused by `key` when known.
+    pub fn model(
+        path: impl Into<PathBuf>,
+        key: Option<&str>,
+        source: impl Into<DeriveError>,
+    ) -> Self {
+        let source = source.into();
+        if matches!(source, DeriveError::Cancelled) {
+            return Error::Cancelled;
+        }
+        Error::Model {
+            path: path.into(),
+            key: key.map(str::to_string),
+            source: Box::new(source),
+        }
+    }
+
+    /// A refused option.
+    pub fn option(name: &str, value: impl std::fmt::Display, message: impl Into<String>) -> Self {
+        Error::Option {
+            name: name.to_string(),
+            value: value.to_string(),
+            message: message.into(),
+        }
+    }
+}

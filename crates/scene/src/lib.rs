@@ -1,0 +1,53 @@
+//! # nurbspring-scene
+//!
+//! The upper floor of nurbspring: both translations between what users write and read and the
+//! models below.
+//!
+//! - **Scene files** ([`Scene`]): the TOML schema ([`spec`]), its validation (file shape,
+//!   sizes, finiteness; every value rule comes from the model type that owns it, and every
+//!   problem is named by its key path), and scene → models ([`Scene::build_dnurbs`],
+//!   [`Scene::lattice_options`], [`Scene::derivation_config`]).
+//! - **`msm.json`** ([`msm_file`]): read into a runnable MSM, written from a derivation, one
+//!   schema ([`nurbspring_msm::MsmFile`]).
+//! - **Results → files**: ParaView and OBJ frames of both models ([`export`]), the derivation
+//!   reports `report.json` (typed, by serde), `report.md` and plots ([`report`]), simulation
+//!   outputs ([`run`]).
+//!
+//! ```
+//! use nurbspring_scene::Scene;
+//! let text = r#"
+//! [curve]
+//! degree = 2
+//! knots = [0, 0, 0, 1, 1, 1]
+//! control_points = [[0, 0, 0], [1, 1, 0], [2, 0, 0]]
+//!
+//! [material]
+//! mu = 2.0
+//! alpha11 = 1.0
+//!
+//! [constraints]
+//! fixed_rings = 1
+//! "#;
+//! let scene = Scene::from_str(text, "string.toml").unwrap();
+//! let model = scene.build_dnurbs().unwrap();
+//! assert_eq!(model.fixed_points(), &[0, 2]);
+//! ```
+
+mod build;
+mod error;
+pub mod export;
+pub mod msm_file;
+mod parse;
+pub mod report;
+pub mod run;
+mod scene;
+mod scene_error;
+pub mod spec;
+pub mod summary;
+mod validate;
+
+pub use build::{MsmOverrides, spring_constants};
+pub use error::Error;
+pub use scene::{MAX_FILE_BYTES, PAPER_SCENE};
+pub use scene_error::{Problem, SceneError, SceneErrorKind};
+pub use spec::*;

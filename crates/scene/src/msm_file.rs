@@ -1,0 +1,175 @@
+//! `msm.json` ↔ runnable mass-spring models, and the MSM of a scene: everything
+//! `simulate --model msm` and `stability` start from. The file's schema is
+//! [`nurbspring_msm::MsmFile`], the one definition of the format.
+
+use std::path::{Path, PathBuf};
+
+use nurbspring_derive::Omega;
+use nurbspring_dnurbs::Geometry;
+use nurbspring_msm::{FileSimulation, MsmFile, MsmModel, SpringLattice};
+use nurbspring_sim::{IntegratorKind, State};
+
+use crate::build::MsmOverrides;
+use crate::scene::read_text;
+use crate::{Error, Scene};
+
+/// Largest `msm.json` read (256 MiB: a lattice of a few million nodes).
+pub const MAX_MSM_FILE_BYTES: u64 = 256 << 20;
+
+/// Run settings of an MSM when its file gives none.
+pub const DEFAULT_RUN: FileSimulation = FileSimulation {
+    dt: 0.01,
+    t_end: 1.0,
+    integrator: IntegratorKind::BackwardEuler,
+};
+
+/// An MSM ready to run: the model, its initial state, how to run it and what to watch.
+#[derive(Debug)]
+pub struct MsmSetup {
+    /// The scene or msm.json it came from.
+    pub path: PathBuf,
+    /// True when it came from an msm.json file (its keys are then the file's).
+    pub from_file: bool,
+    /// The model.
+    pub model: MsmModel,
+    /// The initial state: rest positions (moved by the scene's initial displacement) and the
+    /// initial velocities (`Ω ṗ(0)`, paper eq. (18), or the file's).
+    pub initial: State,
+    /// Time step, end time and integrator.
+    pub run: FileSimulation,
+    /// Probe nodes, the node nearest the centre of the parameter domain first.
+    pub probe_nodes: Vec<usize>,
+    /// Record a sample every n steps.
+    pub save_every: usize,
+    /// Write a ParaView frame every n samples.
+    pub vtk_every: usize,
+}
+
+/// True when `path` names an msm.json file (by its extension).
+pub fn is_msm_file(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+}
+
+/// The MSM of an msm.json file (by extension) or of a scene, with `overrides` applied.
+pub fn load_msm(
+    path: &Path,
+    overrides: &MsmOverrides,
+    flag: &dyn Fn(&str) -> String,
+) -> Result<MsmSetup, Error> {
+    overrides.validate(flag)?;
+    if is_msm_file(path) {
+        read_msm_file(path, overrides)
+    } else {
+        Scene::from_path(path)?.msm_setup(overrides)
+    }
+}
+
+/// Reads an msm.json file (a regular file of at most [`MAX_MSM_FILE_BYTES`]).
+pub fn read_msm_file(path: &Path, overrides: &MsmOverrides) -> Result<MsmSetup, Error> {
+    let text = read_text(path, MAX_MSM_FILE_BYTES, "msm.json")?;
+    let bad = |source| Error::MsmFile {
+        path: path.to_path_buf(),
+        source: Box::new(source),
+    };
+    let file = MsmFile::from_json_str(&text).map_err(bad)?;
+    let mut lattice = SpringLattice::from_file(&file).map_err(bad)?;
+    lattice.set_constants(&overrides.constants);
+    if let Some(m) = overrides.mass {
+        lattice.set_mass(m);
+    }
+    let velocities = file.velocities().map_err(bad)?;
+    let centre = lattice_centre(&lattice);
+    let model = MsmModel::new(lattice).map_err(bad)?;
+    let initial = model.initial_state(&velocities);
+    Ok(MsmSetup {
+        path: path.to_path_buf(),
+        from_file: true,
+        model,
+        initial,
+        run: file.simulation.clone().unwrap_or(DEFAULT_RUN),
+        probe_nodes: vec![centre],
+        save_every: 1,
+        vtk_every: 1,
+    })
+}
+
+/// The node nearest the centre of the nodes' parameters (or of the grid, or of the nodes'
+/// bounding box), ties to the lowest index.
+fn lattice_centre(lattice: &SpringLattice) -> usize {
+    match &lattice.params {
+        Some(params) => {
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for &(u, v) in params {
+                lo = [lo[0].min(u), lo[1].min(v)];
+                hi = [hi[0].max(u), hi[1].max(v)];
+            }
+            lattice.node_nearest(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]))
+        }
+        None if lattice.grid.is_some() => lattice.node_nearest(0.5, 0.5),
+        None => 0,
+    }
+}
+
+impl Scene {
+    /// The scene's MSM: the lattice sampled from its surface (`[msm]` with `overrides`), its
+    /// initial state mapped by Ω (paper eqs. (11), (18)), the scene's run settings.
+    pub fn msm_setup(&self, overrides: &MsmOverrides) -> Result<MsmSetup, Error> {
+        let model = self.build_dnurbs()?;
+        let Geometry::Surface(surface) = model.geometry() else {
+            return Err(self.model_error(
+                Some("curve"),
+                nurbspring_derive::DeriveError::InvalidOption {
+                    name: "geometry",
+                    value: "[curve]".to_string(),
+                    reason: "the mass-spring model needs a [surface] scene".to_string(),
+                },
+            ));
+        };
+        let options = self.lattice_options(overrides)?;
+        let lattice = SpringLattice::from_surface(surface, &options, model.fixed_points())
+            .map_err(|e| self.model_error(Some("msm"), e))?;
+        let params = lattice.params.clone().unwrap_or_default();
+        let omega = Omega::new(model.geometry(), &params, self.dnurbs.weights_as_dofs)
+            .map_err(|e| self.model_error(None, e))?;
+        let nodes = omega.node_state(&model, &self.initial_conditions().state(&model));
+        let probe_nodes = self
+            .probe_params()?
+            .iter()
+            .map(|&(u, v)| lattice.node_nearest(u, v))
+            .collect();
+        let msm = MsmModel::new(lattice).map_err(|e| self.model_error(Some("msm"), e))?;
+        let initial = msm.initial_state_displaced(&nodes.velocities, &nodes.displacements);
+        let time = self.time_settings();
+        Ok(MsmSetup {
+            path: self.path.clone(),
+            from_file: false,
+            model: msm,
+            initial,
+            run: FileSimulation {
+                dt: time.dt,
+                t_end: time.t_end,
+                integrator: time.msm_integrator,
+            },
+            probe_nodes,
+            save_every: self.simulation.save_every.max(1),
+            vtk_every: self.output.vtk_every.max(1),
+        })
+    }
+}
+
+/// The msm.json of a derived lattice: the lattice, where it came from, its initial velocities
+/// and how it was validated.
+pub fn msm_file(
+    lattice: &SpringLattice,
+    scene_label: &str,
+    initial_velocities: &[[f64; 3]],
+    run: FileSimulation,
+) -> MsmFile {
+    MsmFile {
+        scene: Some(scene_label.to_string()),
+        initial_velocities: Some(initial_velocities.to_vec()),
+        simulation: Some(run),
+        ..lattice.to_file()
+    }
+}

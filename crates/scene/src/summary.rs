@@ -1,0 +1,166 @@
+//! What `check` reports of a scene: sizes, dofs, fixed dofs and the MSM's stability limit,
+//! without running anything.
+
+use std::collections::BTreeMap;
+
+use nurbspring_dnurbs::Geometry;
+use nurbspring_sim::IntegratorKind;
+use serde::Serialize;
+
+use crate::build::MsmOverrides;
+use crate::{Error, Scene};
+
+/// The geometry of a scene.
+#[derive(Serialize)]
+pub struct GeometrySummary {
+    /// "surface" or "curve".
+    pub kind: &'static str,
+    /// Degrees `[p, q]` (a curve: `[p]`).
+    pub degree: Vec<usize>,
+    /// Control points `[n_u, n_v]` (a curve: `[n]`).
+    pub control_points: Vec<usize>,
+    /// Non-empty knot spans per direction.
+    pub knot_spans: Vec<usize>,
+    /// Whether the weights differ.
+    pub rational: bool,
+}
+
+/// The D-NURBS of a scene.
+#[derive(Serialize)]
+pub struct DnurbsSummary {
+    /// 3, or 4 with weights as unknowns.
+    pub dofs_per_point: usize,
+    /// All dofs.
+    pub dofs: usize,
+    /// Fixed dofs.
+    pub fixed_dofs: usize,
+    /// Free dofs.
+    pub free_dofs: usize,
+    /// Fixed control points.
+    pub fixed_control_points: usize,
+    /// Non-zeros of K.
+    pub stiffness_nonzeros: usize,
+}
+
+/// The time settings of a scene.
+#[derive(Serialize)]
+pub struct SimulationSummary {
+    /// Time step.
+    pub dt: f64,
+    /// End time.
+    pub t_end: f64,
+    /// Steps.
+    pub steps: f64,
+    /// D-NURBS integrator.
+    pub dnurbs_integrator: IntegratorKind,
+    /// MSM integrator.
+    pub msm_integrator: IntegratorKind,
+}
+
+/// The MSM of a surface scene.
+#[derive(Serialize)]
+pub struct MsmSummary {
+    /// Nodes.
+    pub nodes: usize,
+    /// `[n_u, n_v]`.
+    pub grid: Option<(usize, usize)>,
+    /// Fixed nodes.
+    pub fixed_nodes: usize,
+    /// Free dofs.
+    pub free_dofs: usize,
+    /// Springs per class.
+    pub springs: BTreeMap<String, usize>,
+    /// ω_max of the MSM at rest.
+    pub omega_max: f64,
+    /// 2/ω_max.
+    pub dt_critical: f64,
+    /// Whether the scene's Δt exceeds it.
+    pub dt_exceeds_explicit_limit: bool,
+}
+
+/// `check`'s report.
+#[derive(Serialize)]
+pub struct Summary {
+    /// The scene file.
+    pub scene: String,
+    /// Geometry.
+    pub geometry: GeometrySummary,
+    /// D-NURBS.
+    pub dnurbs: DnurbsSummary,
+    /// Time settings.
+    pub simulation: SimulationSummary,
+    /// The MSM (surfaces only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub msm: Option<MsmSummary>,
+}
+
+/// Validates the scene, builds its models and describes them.
+pub fn summary(scene: &Scene) -> Result<Summary, Error> {
+    let model = scene.build_dnurbs()?;
+    let time = scene.time_settings();
+    let geometry = match model.geometry() {
+        Geometry::Surface(s) => GeometrySummary {
+            kind: "surface",
+            degree: vec![s.basis_u().degree(), s.basis_v().degree()],
+            control_points: vec![s.n_u(), s.n_v()],
+            knot_spans: vec![
+                s.basis_u().knots().nonempty_spans().len(),
+                s.basis_v().knots().nonempty_spans().len(),
+            ],
+            rational: s.weights().iter().any(|&w| w != s.weights()[0]),
+        },
+        Geometry::Curve(c) => GeometrySummary {
+            kind: "curve",
+            degree: vec![c.basis().degree()],
+            control_points: vec![c.n_control_points()],
+            knot_spans: vec![c.basis().knots().nonempty_spans().len()],
+            rational: c.weights().iter().any(|&w| w != c.weights()[0]),
+        },
+    };
+    let dof_map = model.dof_map();
+    let msm = match model.geometry() {
+        Geometry::Surface(_) => {
+            let setup = scene.msm_setup(&MsmOverrides::default())?;
+            let lattice = setup.model.lattice();
+            let stability = setup
+                .model
+                .stability()
+                .map_err(|e| Error::model(&scene.path, Some("msm"), e))?;
+            Some(MsmSummary {
+                nodes: lattice.n_nodes(),
+                grid: lattice.grid,
+                fixed_nodes: lattice.fixed.iter().filter(|&&f| f).count(),
+                free_dofs: setup.model.dof_map().n_free(),
+                springs: lattice
+                    .classes()
+                    .into_iter()
+                    .map(|c| (c.name().to_string(), lattice.count(c)))
+                    .collect(),
+                omega_max: stability.omega_max,
+                dt_critical: stability.dt_critical,
+                dt_exceeds_explicit_limit: time.dt >= stability.dt_critical,
+            })
+        }
+        Geometry::Curve(_) => None,
+    };
+    Ok(Summary {
+        scene: scene.path.display().to_string(),
+        geometry,
+        dnurbs: DnurbsSummary {
+            dofs_per_point: model.matrices().dofs_per_point,
+            dofs: dof_map.n_total(),
+            fixed_dofs: dof_map.n_total() - dof_map.n_free(),
+            free_dofs: dof_map.n_free(),
+            fixed_control_points: model.fixed_points().len(),
+            stiffness_nonzeros: model.matrices().stiffness.nnz(),
+        },
+        simulation: SimulationSummary {
+            dt: time.dt,
+            t_end: time.t_end,
+            steps: (time.t_end / time.dt).ceil(),
+            dnurbs_integrator: time.dnurbs_integrator,
+            msm_integrator: time.msm_integrator,
+        },
+        msm,
+    })
+}
