@@ -49,6 +49,20 @@ impl MsmModel {
         IntegratorKind::Newmark,
     ];
 
+    /// Why `integrator` cannot run an MSM; `None` when it can.
+    pub fn integrator_problem(integrator: IntegratorKind) -> Option<String> {
+        (!Self::INTEGRATORS.contains(&integrator)).then(|| {
+            format!(
+                "not an integrator of the mass-spring model; expected one of {}",
+                Self::INTEGRATORS
+                    .iter()
+                    .map(|k| k.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
+    }
+
     /// Validates the lattice ([`SpringLattice::validate`]) and precomputes the node-to-spring
     /// incidence of the free nodes. The tangent pattern is built on first use.
     pub fn new(lattice: SpringLattice) -> Result<Self, MsmError> {

@@ -101,6 +101,18 @@ impl Scene {
         Error::model(&self.path, key, e)
     }
 
+    /// The error for a `[curve]` scene where `what` needs a surface.
+    pub(crate) fn needs_surface(&self, what: &str) -> Error {
+        self.model_error(
+            Some("curve"),
+            nurbspring_derive::DeriveError::InvalidOption {
+                name: "geometry",
+                value: "[curve]".to_string(),
+                reason: format!("{what} needs a [surface] scene"),
+            },
+        )
+    }
+
     /// The surface or curve (validated when the scene was read).
     pub fn build_geometry(&self) -> Result<Geometry, Error> {
         Ok(match &self.geometry {
@@ -246,14 +258,7 @@ impl Scene {
     /// "given" parameters, evaluated beside the derived ones.
     pub fn derivation_config(&self) -> Result<Config, Error> {
         let Geometry::Surface(surface) = self.build_geometry()? else {
-            return Err(self.model_error(
-                Some("curve"),
-                nurbspring_derive::DeriveError::InvalidOption {
-                    name: "geometry",
-                    value: "[curve]".to_string(),
-                    reason: "deriving a mass-spring model needs a [surface] scene".to_string(),
-                },
-            ));
+            return Err(self.needs_surface("deriving a mass-spring model"));
         };
         let fit = &self.fit;
         Ok(Config {

@@ -117,14 +117,7 @@ impl Scene {
     pub fn msm_setup(&self, overrides: &MsmOverrides) -> Result<MsmSetup, Error> {
         let model = self.build_dnurbs()?;
         let Geometry::Surface(surface) = model.geometry() else {
-            return Err(self.model_error(
-                Some("curve"),
-                nurbspring_derive::DeriveError::InvalidOption {
-                    name: "geometry",
-                    value: "[curve]".to_string(),
-                    reason: "the mass-spring model needs a [surface] scene".to_string(),
-                },
-            ));
+            return Err(self.needs_surface("the mass-spring model"));
         };
         let options = self.lattice_options(overrides)?;
         let lattice = SpringLattice::from_surface(surface, &options, model.fixed_points())

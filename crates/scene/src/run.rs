@@ -83,6 +83,30 @@ fn resolve_time(
     Ok((dt, t_end))
 }
 
+/// An integrator that does not apply: named by `--integrator` when the request chose it, by
+/// the file's `key` otherwise.
+fn integrator_error(
+    path: &Path,
+    key: &str,
+    request: &RunRequest,
+    integrator: IntegratorKind,
+    reason: String,
+) -> Error {
+    if request.integrator.is_some() {
+        Error::option("--integrator", integrator, reason)
+    } else {
+        Error::model(
+            path,
+            Some(key),
+            DeriveError::InvalidOption {
+                name: "integrator",
+                value: integrator.to_string(),
+                reason,
+            },
+        )
+    }
+}
+
 /// Sample and frame bookkeeping shared by both models.
 struct Frames<'a> {
     out: Option<&'a Path>,
@@ -137,19 +161,13 @@ pub fn simulate_dnurbs(
     if let Some(reason) =
         nurbspring_dnurbs::integrator_problem(integrator, &scene.material, &scene.dnurbs)
     {
-        return Err(if request.integrator.is_some() {
-            Error::option("--integrator", integrator, reason)
-        } else {
-            Error::model(
-                &scene.path,
-                Some("simulation.dnurbs_integrator"),
-                DeriveError::InvalidOption {
-                    name: "integrator",
-                    value: integrator.to_string(),
-                    reason,
-                },
-            )
-        });
+        return Err(integrator_error(
+            &scene.path,
+            "simulation.dnurbs_integrator",
+            request,
+            integrator,
+            reason,
+        ));
     }
     let probes = Omega::new(
         model.geometry(),
@@ -208,24 +226,14 @@ pub fn simulate_msm(
 ) -> Result<(Simulated, Result<RunSummary, Error>), Error> {
     let (dt, t_end) = resolve_time(&setup.path, setup.run.dt, setup.run.t_end, request)?;
     let integrator = request.integrator.unwrap_or(setup.run.integrator);
-    if !MsmModel::INTEGRATORS.contains(&integrator) {
-        let reason = format!(
-            "not an integrator of the mass-spring model; expected one of {}",
-            nurbspring_dnurbs::integrator_names(&MsmModel::INTEGRATORS)
-        );
-        return Err(if request.integrator.is_some() {
-            Error::option("--integrator", integrator, reason)
-        } else {
-            Error::model(
-                &setup.path,
-                Some("simulation.integrator"),
-                DeriveError::InvalidOption {
-                    name: "integrator",
-                    value: integrator.to_string(),
-                    reason,
-                },
-            )
-        });
+    if let Some(reason) = MsmModel::integrator_problem(integrator) {
+        return Err(integrator_error(
+            &setup.path,
+            "simulation.integrator",
+            request,
+            integrator,
+            reason,
+        ));
     }
     let mut opts = RunOptions::new(dt, t_end, integrator);
     opts.cancel = request.cancel.clone();

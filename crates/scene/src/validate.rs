@@ -188,6 +188,25 @@ fn check_knot_count(
     true
 }
 
+/// A control point `[x, y, z]` at `key`: three finite numbers.
+fn control_point(p: &mut Problems, key: &str, q: &[f64]) -> Option<[f64; 3]> {
+    if q.len() != 3 {
+        p.push(
+            key,
+            fmt_list(q),
+            format!(
+                "a control point needs 3 coordinates [x, y, z], got {}",
+                q.len()
+            ),
+        );
+        return None;
+    }
+    for (c, &x) in q.iter().enumerate() {
+        p.finite(&format!("{key}[{c}]"), x);
+    }
+    Some([q[0], q[1], q[2]])
+}
+
 /// `[surface]`: shapes, finiteness and weights; `None` when the points cannot be read.
 fn surface_spec(s: RawSurface, p: &mut Problems) -> Option<SurfaceSpec> {
     let start = p.len();
@@ -245,22 +264,9 @@ fn surface_spec(s: RawSurface, p: &mut Problems) -> Option<SurfaceSpec> {
         }
         let mut out = Vec::with_capacity(n_v);
         for (j, q) in row.iter().enumerate() {
-            let key = format!("surface.control_points[{i}][{j}]");
-            if q.len() != 3 {
-                p.push(
-                    &key,
-                    fmt_list(q),
-                    format!(
-                        "a control point needs 3 coordinates [x, y, z], got {}",
-                        q.len()
-                    ),
-                );
-                continue;
+            if let Some(point) = control_point(p, &format!("surface.control_points[{i}][{j}]"), q) {
+                out.push(point);
             }
-            for (c, &x) in q.iter().enumerate() {
-                p.finite(&format!("{key}[{c}]"), x);
-            }
-            out.push([q[0], q[1], q[2]]);
         }
         points.push(out);
     }
@@ -352,22 +358,9 @@ fn curve_spec(c: RawCurve, p: &mut Problems) -> Option<CurveSpec> {
     }
     let mut points = Vec::with_capacity(n);
     for (i, q) in c.control_points.iter().enumerate() {
-        let key = format!("curve.control_points[{i}]");
-        if q.len() != 3 {
-            p.push(
-                &key,
-                fmt_list(q),
-                format!(
-                    "a control point needs 3 coordinates [x, y, z], got {}",
-                    q.len()
-                ),
-            );
-            continue;
+        if let Some(point) = control_point(p, &format!("curve.control_points[{i}]"), q) {
+            points.push(point);
         }
-        for (k, &x) in q.iter().enumerate() {
-            p.finite(&format!("{key}[{k}]"), x);
-        }
-        points.push([q[0], q[1], q[2]]);
     }
     if let Some(w) = &c.weights {
         if w.len() != n {
@@ -832,14 +825,11 @@ fn check_simulation(
             reason,
         );
     }
-    if !MsmModel::INTEGRATORS.contains(&s.msm_integrator) {
+    if let Some(reason) = MsmModel::integrator_problem(s.msm_integrator) {
         p.push(
             "simulation.msm_integrator",
             format!("\"{}\"", s.msm_integrator),
-            format!(
-                "not an integrator of the mass-spring model; expected one of {}",
-                nurbspring_dnurbs::integrator_names(&MsmModel::INTEGRATORS)
-            ),
+            reason,
         );
     }
     if s.probes.len() > MAX_ITEMS {
