@@ -29,7 +29,7 @@ fn sheet(n: usize) -> MsmModel {
             nodes_u: n,
             nodes_v: n,
         },
-        springs: Constants::from_pairs([
+        constants: Constants::from_pairs([
             (Class::Spring(SpringKind::Structural), 1000.0),
             (Class::Spring(SpringKind::Shear), 500.0),
         ]),

@@ -42,7 +42,7 @@ pub fn run_scene_text(text: &str) {
         }
         let _ = setup.model.stability();
     }
-    if let Ok(config) = scene.derivation_config()
+    if let Ok(config) = scene.derivation_config(Some(nurbspring_derive::Method::Paper))
         && let Ok(setup) = nurbspring_derive::Setup::new(&config)
     {
         for dofs in [nurbspring_derive::FitDofs::All, nurbspring_derive::FitDofs::Free] {

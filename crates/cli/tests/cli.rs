@@ -275,6 +275,7 @@ fn derive_writes_everything_and_msm_json_round_trips() {
     bin()
         .arg("derive")
         .arg(paper())
+        .args(["--derivation", "paper"])
         .arg("--out")
         .arg(dir.path())
         .assert()
@@ -311,7 +312,10 @@ fn derive_writes_everything_and_msm_json_round_trips() {
         assert!(report.pointer(key).is_some(), "report.json lacks {key}");
     }
     let csv = std::fs::read_to_string(dir.path().join("central_node.csv")).unwrap();
-    assert_eq!(csv.lines().next().unwrap(), "t,dnurbs_z,msm_z");
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        "t,dnurbs_x,dnurbs_y,dnurbs_z,msm_x,msm_y,msm_z"
+    );
     let sim_dir = dir.path().join("sim");
     bin()
         .arg("simulate")
@@ -421,6 +425,7 @@ fn built_in_scene_is_the_example() {
     bin()
         .arg("derive")
         .arg(paper())
+        .args(["--derivation", "paper"])
         .arg("--out")
         .arg(&b)
         .assert()

@@ -151,7 +151,7 @@ impl StiffnessFit {
             let eig = symmetric_eigen(&normalized)?;
             if eig.values[0] < 1e-10 {
                 let v = eig.vectors.column(0);
-                let involved: Vec<&str> = (0..c)
+                let involved: Vec<String> = (0..c)
                     .filter(|&i| v[i].abs() > 1e-3)
                     .map(|i| self.classes[i].name())
                     .collect();

@@ -32,27 +32,49 @@
 //! # let _ = FitDofs::All;
 //! ```
 
+pub mod beyond;
 mod error;
+mod evaluation;
+mod excitation;
 mod fit;
+mod fnnls;
+mod linear;
 mod mass;
+mod modal;
+mod modal_solution;
 mod omega;
+mod outcome;
 pub mod paper;
 mod pipeline;
+mod reference;
 mod runner;
+mod scalar;
 mod setup;
 mod validation;
 
 pub use error::DeriveError;
+pub use evaluation::{
+    DnurbsModes, PERIODS, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, horizon,
+};
+pub use excitation::ExcitationReport;
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
+pub use linear::derive_linear;
 pub use mass::{distinct_non_null, mass_eigenvalues};
+pub use modal::{MASS_FLOOR, MASS_REGULARIZATION, MODES, ModalFitReport, lowest_frequency};
+pub use modal_solution::ModalBasis;
 pub use omega::{NodeState, Omega};
+pub use outcome::{
+    Derivation, FitDetail, FrequencyRow, MassCandidate, MassReport, NodeReduction, ParameterSet,
+    ProbeError, ReductionReport, Spectrum, Validation,
+};
 pub use pipeline::{
-    Derivation, FitReport, MassCandidate, MassReport, ParameterSet, SelectedReading, Spectrum,
-    TrustRegionReport, ValidationReport, derive_msm, evaluate, fit_step, mass_step, msm_spectrum,
-    reference_run, spectra,
+    FitReport, Judge, SelectedReading, TrustRegionReport, derive_msm, evaluate, fit_step,
+    mass_step, msm_spectrum, reference_run, spectra,
 };
+pub use reference::ReferenceKind;
 pub use runner::{Recording, Watched, record, record_noted};
+pub use scalar::ScalarSystem;
 pub use setup::{
-    Config, FitMethod, FitOptions, InitialConditions, MassChoice, Setup, TimeSettings,
+    Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Method, Setup, TimeSettings,
 };
-pub use validation::{Comparison, Trajectory, compare, dominant_period};
+pub use validation::{Comparison, Trajectory, compare, compare_points, dominant_period, mac};

@@ -3,16 +3,18 @@
 //! line. Readings are enums, thresholds are named constants, and every sentence of a verdict
 //! is built from the numbers measured here.
 
-use nurbspring_dnurbs::RestShape;
+use nurbspring_dnurbs::{Geometry, RestShape};
 use nurbspring_geom::NurbsSurface;
 use nurbspring_msm::{Class, Constants, SpringKind};
 use nurbspring_sim::IntegratorKind;
 use serde::Serialize;
 
 use crate::DeriveError;
+use crate::beyond::{Beyond, beyond};
 use crate::fit::FitDofs;
 use crate::fit::FitResult;
-use crate::pipeline::{Derivation, derive_msm};
+use crate::outcome::Derivation;
+use crate::pipeline::derive_msm;
 use crate::setup::{Config, Setup};
 use crate::validation::{compare, dominant_period};
 
@@ -309,12 +311,16 @@ pub struct PaperReport {
     pub lattice: LatticeFacts,
     /// The verdicts, one per paper number.
     pub verdicts: Vec<VerdictLine>,
+    /// The default derivation beside the paper's, on the paper's scene.
+    pub beyond: Beyond,
 }
 
 fn with_net(base: &Config, net: ControlNet) -> Result<Config, DeriveError> {
     let mut c = base.clone();
-    if net == ControlNet::Greville {
-        c.surface = greville_net(&base.surface)?;
+    if net == ControlNet::Greville
+        && let Geometry::Surface(s) = &base.geometry
+    {
+        c.geometry = Geometry::Surface(greville_net(s)?);
     }
     Ok(c)
 }
@@ -324,7 +330,7 @@ fn fit_readings(setup: &Setup, net: ControlNet) -> Result<Vec<FitReading>, Deriv
     let mut out = Vec::new();
     let paper = paper_constants();
     for dofs in [FitDofs::All, FitDofs::Free] {
-        let fit = setup.fit(dofs);
+        let fit = setup.fit(dofs)?;
         let paper_k = paper.values_of(fit.classes());
         let at_paper = fit.relative_residual(&paper_k)?;
         for nonnegative in [false, true] {
@@ -513,6 +519,10 @@ pub fn reproduce(
         fits.extend(fit_readings(&Setup::new(&with_net(base, net)?)?, net)?);
     }
     let mass_nearest = nearest_eigenvalues(&main);
+    let selected = main
+        .paper_fit()
+        .map(|f| f.selected.constants.clone())
+        .unwrap_or_default();
     let mut dynamics = Vec::new();
     for net in ControlNet::ALL {
         for rest in [RestShape::Initial, RestShape::Zero] {
@@ -520,7 +530,7 @@ pub fn reproduce(
                 base,
                 net,
                 rest,
-                (&main.fit.selected.constants, main.mass.selected),
+                (&selected, main.mass.selected),
             )?);
         }
     }
@@ -530,6 +540,7 @@ pub fn reproduce(
         msm_frequencies: main.spectrum.msm.len(),
     };
     let verdicts = verdicts(base, &main, &fits, &mass_nearest, &dynamics, &lattice);
+    let beyond = beyond(base, &main)?;
     Ok((
         main,
         PaperReport {
@@ -538,6 +549,7 @@ pub fn reproduce(
             dynamics,
             lattice,
             verdicts,
+            beyond,
         },
     ))
 }

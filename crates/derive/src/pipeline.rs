@@ -6,16 +6,26 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use nurbspring_dnurbs::{DnurbsModel, Loads};
 use nurbspring_msm::{Class, Constants, MsmModel, SpringLattice};
-use nurbspring_sim::{DynamicModel, IntegratorKind};
+use nurbspring_sim::{DynamicModel, IntegratorKind, RunOptions, State};
 use serde::Serialize;
 
 use crate::DeriveError;
-use crate::fit::FitDofs;
-use crate::fit::FitResult;
+use crate::evaluation::{
+    DnurbsModes, TABLE_MODES, dnurbs_impulse_run, dnurbs_watch, horizon, impulse, initial_speed,
+    validation, warnings, with_totals,
+};
+use crate::fit::{FitDofs, FitResult};
 use crate::mass::mass_eigenvalues;
-use crate::setup::{Config, FitMethod, FitOptions, MassChoice, Setup};
-use crate::validation::{Comparison, Trajectory, compare};
+use crate::outcome::{
+    Derivation, FitDetail, FrequencyRow, MassCandidate, MassReport, ParameterSet, Spectrum,
+    Validation,
+};
+use crate::reference::{ReferenceKind, run_scalar, sample_times};
+use crate::runner::{Watched, record_noted};
+use crate::setup::{Config, FitMethod, FitOptions, MassChoice, Method, Setup};
+use crate::validation::{Trajectory, compare};
 
 /// The reading of eq. (15) the derived MSM uses.
 #[derive(Clone, Debug, PartialEq)]
@@ -92,142 +102,6 @@ pub struct TrustRegionReport {
     pub max_relative_difference_to_closed_form: f64,
 }
 
-/// One mass candidate of the scan.
-#[derive(Clone, Debug, Serialize)]
-pub struct MassCandidate {
-    /// Node mass tried.
-    pub m: f64,
-    /// RMS of the central-node z difference to the D-NURBS run (∞ when the MSM run failed).
-    pub rms: f64,
-    /// Max abs of that difference.
-    pub max_abs: f64,
-    /// Integrator used for this candidate.
-    pub integrator: IntegratorKind,
-    /// Why the run stopped early, if it did.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stopped: Option<String>,
-}
-
-/// The mass step.
-#[derive(Clone, Debug, Serialize)]
-pub struct MassReport {
-    /// Distinct non-null eigenvalues of the full M, ascending.
-    pub eigenvalues: Vec<f64>,
-    /// Distinct eigenvalues of M restricted to the free dofs, ascending.
-    pub eigenvalues_free_dofs: Vec<f64>,
-    /// Every candidate tried with its error.
-    pub candidates: Vec<MassCandidate>,
-    /// The mass selected (smallest RMS among the runs that finished).
-    pub selected: f64,
-    /// How it was chosen.
-    pub rule: String,
-}
-
-/// Stability, residuals and validation of an MSM parameter set.
-#[derive(Clone, Debug, Serialize)]
-pub struct ParameterSet {
-    /// The constants (`k_edge`, `k_diag`, `k_bend` in files).
-    #[serde(flatten)]
-    pub constants: Constants,
-    /// Node mass.
-    pub m: f64,
-    /// ω_max of the linearized MSM at rest.
-    pub omega_max: f64,
-    /// Explicit stability limit 2/ω_max.
-    pub dt_critical: f64,
-    /// Whether the scene's Δt exceeds it.
-    pub dt_exceeds_explicit_limit: bool,
-    /// Relative residual of eq. (15), every dof.
-    pub relative_residual_all_dofs: f64,
-    /// Relative residual of eq. (15), free dofs.
-    pub relative_residual_free_dofs: f64,
-    /// Central node z: comparison with the D-NURBS run, with the scene's MSM integrator when
-    /// it is stable at the scene's Δt, Newmark otherwise.
-    pub validation: ValidationReport,
-    /// When the scene's integrator is explicit and Δt exceeds its limit: what that run does.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub explicit_run: Option<ValidationReport>,
-}
-
-/// Figure 3 numbers.
-#[derive(Clone, Debug, Serialize)]
-pub struct ValidationReport {
-    /// Integrator of the MSM run.
-    pub integrator: IntegratorKind,
-    /// RMS of the central node's z difference.
-    pub rms: f64,
-    /// Max abs of that difference.
-    pub max_abs: f64,
-    /// RMS relative to the D-NURBS amplitude.
-    pub relative_rms: f64,
-    /// D-NURBS central-node amplitude `max |z − z₀|`.
-    pub dnurbs_amplitude: f64,
-    /// Dominant period of the D-NURBS central node.
-    pub dnurbs_period: Option<f64>,
-    /// Dominant period of the MSM central node.
-    pub msm_period: Option<f64>,
-    /// Samples compared.
-    pub samples: usize,
-    /// Why the MSM run stopped early, if it did.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub msm_stopped: Option<String>,
-}
-
-impl ValidationReport {
-    fn new(integrator: IntegratorKind, c: &Comparison, stopped: Option<String>) -> Self {
-        Self {
-            integrator,
-            rms: c.rms,
-            max_abs: c.max_abs,
-            relative_rms: c.relative_rms,
-            dnurbs_amplitude: c.reference_amplitude,
-            dnurbs_period: c.reference_period,
-            msm_period: c.other_period,
-            samples: c.samples,
-            msm_stopped: stopped,
-        }
-    }
-}
-
-/// Angular frequencies (rad/s) of the constrained D-NURBS and of the derived MSM linearized at
-/// rest, lowest first (the MSM's zero frequencies are its directions without linear stiffness).
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct Spectrum {
-    /// D-NURBS: `K φ = ω² M φ` on the free dofs.
-    pub dnurbs: Vec<f64>,
-    /// MSM: `K_T φ = ω² M_S φ` on the free node dofs.
-    pub msm: Vec<f64>,
-}
-
-/// Result of [`derive_msm`].
-#[derive(Clone, Debug)]
-pub struct Derivation {
-    /// The derived lattice (fitted constants, selected mass, the scene's damping).
-    pub lattice: SpringLattice,
-    /// Fit step.
-    pub fit: FitReport,
-    /// Mass step.
-    pub mass: MassReport,
-    /// The derived parameters with their stability and validation.
-    pub derived: ParameterSet,
-    /// The scene's own parameters, evaluated the same way.
-    pub given: Option<ParameterSet>,
-    /// The MSM run with the scene's own parameters.
-    pub given_trajectory: Option<Trajectory>,
-    /// Probe parameters `(u, v)`, the centre first.
-    pub probes: Vec<(f64, f64)>,
-    /// Lattice node of each probe.
-    pub probe_nodes: Vec<usize>,
-    /// The D-NURBS run.
-    pub dnurbs_trajectory: Trajectory,
-    /// The derived MSM run.
-    pub msm_trajectory: Trajectory,
-    /// Initial node velocities `Ω ṗ(0)` (eq. 18), per node.
-    pub node_velocities: Vec<[f64; 3]>,
-    /// Angular frequencies of both linearized models, lowest first.
-    pub spectrum: Spectrum,
-}
-
 /// Largest model whose full spectrum is reported (dense eigenproblems).
 const MAX_SPECTRUM_DOFS: usize = 1500;
 
@@ -257,7 +131,7 @@ pub fn fit_step(setup: &Setup, options: &FitOptions) -> Result<FitReport, Derive
     } else {
         unconstrained.clone()
     };
-    let fit = setup.fit(options.dofs);
+    let fit = setup.fit(options.dofs)?;
     let start = vec![1.0; fit.classes().len()];
     let tr = fit.trust_region(&start, nonnegative, 500)?;
     let tr_result = FitResult {
@@ -377,6 +251,7 @@ pub fn mass_step(
         candidates,
         selected,
         rule,
+        ..MassReport::default()
     })
 }
 
@@ -421,33 +296,137 @@ fn mass_candidates(
     Ok(out)
 }
 
-/// Step 4, a parameter set evaluated: stability, residuals and the central-node comparison.
-/// The comparison uses `integrator` when it is stable at the scene's Δt, Newmark otherwise; in
-/// that case the requested explicit run is also made (forced past its limit) and reported in
+/// The D-NURBS watched at the probes over the validation horizon: the exact modal solution
+/// of its scalar system when it has one and is undamped, Newmark otherwise; `state` the
+/// initial state (`None`: the scene's) and `loaded` whether the scene's loads act.
+pub struct Judge<'a> {
+    setup: &'a Setup,
+    config: &'a Config,
+    modes: Option<DnurbsModes>,
+    /// Validation horizon.
+    pub horizon: f64,
+    /// Sampling step.
+    pub dt: f64,
+    /// Sample times.
+    pub times: Vec<f64>,
+}
+
+impl<'a> Judge<'a> {
+    /// The judge of `setup`'s derived models; `modes` the D-NURBS's scalar system and modes
+    /// when it has them.
+    pub fn new(
+        setup: &'a Setup,
+        config: &'a Config,
+        modes: Option<DnurbsModes>,
+    ) -> Result<Self, DeriveError> {
+        let omega1 = match &modes {
+            Some(m) => m.omega1(),
+            None => {
+                let m = setup.model().modes(1)?;
+                m.omega.first().copied().unwrap_or(0.0)
+            }
+        };
+        let horizon = horizon(config.time.t_end, omega1);
+        let (dt, times) = sample_times(horizon, config.time.dt);
+        Ok(Self {
+            setup,
+            config,
+            modes,
+            horizon,
+            dt,
+            times,
+        })
+    }
+
+    /// The D-NURBS's scalar system and modes, when it has them.
+    pub fn modes(&self) -> Option<&DnurbsModes> {
+        self.modes.as_ref()
+    }
+
+    /// The reference run from the scene's state.
+    pub fn reference(&self) -> Result<(Trajectory, ReferenceKind), DeriveError> {
+        match &self.modes {
+            Some(m) => run_scalar(
+                &m.system,
+                &m.basis,
+                &dnurbs_watch(self.setup, &m.system),
+                &self.times,
+                self.dt,
+            ),
+            None => Ok((
+                self.setup
+                    .run_dnurbs(IntegratorKind::Newmark, self.dt, self.horizon, None)?,
+                ReferenceKind::Newmark,
+            )),
+        }
+    }
+
+    /// The reference run of the second excitation from `impulse`, without loads.
+    pub fn impulse_reference(
+        &self,
+        impulse: &State,
+    ) -> Result<(Trajectory, ReferenceKind), DeriveError> {
+        match &self.modes {
+            Some(m) => dnurbs_impulse_run(self.setup, m, impulse, &self.times, self.dt),
+            None => {
+                let c = self.config;
+                let model = DnurbsModel::new(
+                    c.geometry.clone(),
+                    c.material.clone(),
+                    Loads::default(),
+                    &c.constraints,
+                    c.dnurbs.clone(),
+                )?;
+                let opts = RunOptions::new(self.dt, self.horizon, IntegratorKind::Newmark);
+                let watched = Watched::Dnurbs {
+                    model: &model,
+                    probes: self.setup.probe_omega(),
+                };
+                Ok((
+                    record_noted(watched, impulse.clone(), &opts)?,
+                    ReferenceKind::Newmark,
+                ))
+            }
+        }
+    }
+}
+
+/// Step 4, a parameter set evaluated: stability, residuals, and the 3-D comparison of the
+/// probes with the D-NURBS reference over the validation horizon. The MSM runs with
+/// `integrator` when it is stable at the scene's Δt, Newmark otherwise; in that case the
+/// requested explicit run is also made (forced past its limit) and reported in
 /// `explicit_run`, to show what it does.
 pub fn evaluate(
     setup: &Setup,
     config: &Config,
+    judge: &Judge<'_>,
+    reference: &(Trajectory, ReferenceKind),
     constants: &Constants,
     m: f64,
     integrator: IntegratorKind,
-    dnurbs: &Trajectory,
 ) -> Result<(ParameterSet, Trajectory), DeriveError> {
     let (omega_max, dt_critical) = setup.stability(constants, m)?;
     let (res_all, res_free) = setup.residuals_at(constants)?;
     let used = stable_integrator(integrator, config.time.dt, dt_critical);
-    let z_ref = dnurbs.component(0, 2);
-    let run = |kind: IntegratorKind| -> Result<(ValidationReport, Trajectory), DeriveError> {
+    let run = |kind: IntegratorKind| -> Result<(Validation, Trajectory), DeriveError> {
         let traj = setup.run_msm(
             setup.lattice_with(constants, m),
             kind,
-            config.time.dt,
-            config.time.t_end,
+            judge.dt,
+            judge.horizon,
             true,
             None,
         )?;
-        let c = compare(&dnurbs.t, &z_ref, &traj.component(0, 2));
-        Ok((ValidationReport::new(kind, &c, traj.stopped.clone()), traj))
+        let v = validation(
+            setup,
+            &reference.0,
+            reference.1,
+            &traj,
+            kind.name().to_string(),
+            judge.horizon,
+            judge.dt,
+        );
+        Ok((v, traj))
     };
     let (validation, traj) = run(used)?;
     let explicit_run = if used != integrator {
@@ -462,8 +441,8 @@ pub fn evaluate(
             omega_max,
             dt_critical,
             dt_exceeds_explicit_limit: config.time.dt >= dt_critical,
-            relative_residual_all_dofs: res_all,
-            relative_residual_free_dofs: res_free,
+            relative_residual_all_dofs: Some(res_all),
+            relative_residual_free_dofs: Some(res_free),
             validation,
             explicit_run,
         },
@@ -513,8 +492,8 @@ pub fn msm_spectrum(lattice: &SpringLattice) -> Result<Vec<f64>, DeriveError> {
         .collect())
 }
 
-/// Derives the MSM that mimics the D-NURBS model (paper Section III) and validates it
-/// (Figure 3): the steps of this module in order. `cancel` stops long runs (Ctrl-C);
+/// Derives the MSM that mimics the D-NURBS model by the paper's method (Section III) and
+/// validates it: the steps of this module in order. `cancel` stops long runs (Ctrl-C);
 /// `progress(done, total)` reports the mass scan.
 pub fn derive_msm(
     config: &Config,
@@ -523,46 +502,124 @@ pub fn derive_msm(
 ) -> Result<(Derivation, Setup), DeriveError> {
     let setup = Setup::new(config)?;
     let fit = fit_step(&setup, &config.fit)?;
-    let dnurbs = reference_run(&setup, config, cancel.clone())?;
+    let scan_reference = reference_run(&setup, config, cancel.clone())?;
     let mass = mass_step(
         &setup,
         config,
         &fit.selected.constants,
-        &dnurbs,
-        cancel,
+        &scan_reference,
+        cancel.clone(),
         progress,
     )?;
+    let judge = Judge::new(&setup, config, DnurbsModes::new(&setup, "paper").ok())?;
+    let reference = judge.reference()?;
+    if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
+        return Err(DeriveError::Cancelled);
+    }
     let integrator = config.time.msm_integrator;
+    let constants = fit.selected.constants.clone();
     let (derived, msm_trajectory) = evaluate(
         &setup,
         config,
-        &fit.selected.constants,
+        &judge,
+        &reference,
+        &constants,
         mass.selected,
         integrator,
-        &dnurbs,
     )?;
     let (given, given_trajectory) = match &config.given {
         Some((constants, m)) => {
-            let (p, t) = evaluate(&setup, config, constants, *m, integrator, &dnurbs)?;
+            let (p, t) = evaluate(
+                &setup, config, &judge, &reference, constants, *m, integrator,
+            )?;
             (Some(p), Some(t))
         }
         None => (None, None),
     };
-    let lattice = setup.lattice_with(&fit.selected.constants, mass.selected);
+    let lattice = setup.lattice_with(&constants, mass.selected);
+    // The second excitation: an impulse, no loads.
+    let impulse = impulse(&setup, initial_speed(setup.dnurbs_initial()))?;
+    let impulse_reference = judge.impulse_reference(&impulse)?;
+    let mut unloaded = lattice.clone();
+    unloaded.gravity = [0.0; 3];
+    unloaded.forces.clear();
+    let nodes = setup.omega().node_state(setup.model(), &impulse);
+    let used = stable_integrator(integrator, judge.dt, derived.dt_critical);
+    let mut opts = RunOptions::new(judge.dt, judge.horizon, used);
+    opts.force_unstable = true;
+    let impulse_run = setup.run_msm_from(unloaded, &nodes, &opts)?;
+    let second_excitation = validation(
+        &setup,
+        &impulse_reference.0,
+        impulse_reference.1,
+        &impulse_run,
+        used.name().to_string(),
+        judge.horizon,
+        judge.dt,
+    );
     let spectrum = spectra(&setup, &lattice)?;
+    let frequencies = paper_frequencies(&spectrum);
+    let mass = with_totals(mass, setup.model(), &lattice.masses, &lattice.fixed);
+    let clamped: Vec<String> = fit
+        .selected
+        .constants
+        .iter()
+        .filter(|&(_, k)| k == 0.0)
+        .map(|(c, _)| c.symbol())
+        .collect();
+    let warnings = warnings(
+        Method::Paper,
+        &derived.validation,
+        &second_excitation,
+        &frequencies,
+        &mass,
+        &clamped,
+    );
     let derivation = Derivation {
-        lattice,
-        fit,
+        method: Method::Paper,
+        lattice: Some(lattice),
+        reduction: None,
+        fit: FitDetail::Paper(fit),
         mass,
         derived,
         given,
         given_trajectory,
+        second_excitation,
+        frequencies,
         probes: setup.probes().to_vec(),
         probe_nodes: setup.probe_nodes().to_vec(),
-        dnurbs_trajectory: dnurbs,
+        dnurbs_trajectory: reference.0,
         msm_trajectory,
         node_velocities: setup.node_velocities().to_vec(),
         spectrum,
+        warnings,
     };
     Ok((derivation, setup))
+}
+
+/// The frequency table of a spring lattice: the distinct non-zero frequencies of both
+/// spectra by rank (no MAC: a spring lattice's modes are not isotropic triplets).
+fn paper_frequencies(spectrum: &Spectrum) -> Vec<FrequencyRow> {
+    let distinct = |v: &[f64]| -> Vec<f64> {
+        let mut out: Vec<f64> = Vec::new();
+        for &w in v.iter().filter(|&&w| w > 0.0) {
+            if out.last().is_none_or(|&l| (w - l).abs() > 1e-9 * w) {
+                out.push(w);
+            }
+        }
+        out
+    };
+    let (a, b) = (distinct(&spectrum.dnurbs), distinct(&spectrum.msm));
+    a.iter()
+        .zip(&b)
+        .take(TABLE_MODES)
+        .enumerate()
+        .map(|(i, (&d, &m))| FrequencyRow {
+            mode: i + 1,
+            dnurbs: d,
+            msm: m,
+            relative_difference: m / d - 1.0,
+            mac: None,
+        })
+        .collect()
 }

@@ -1,12 +1,11 @@
-//! What a derivation starts from ([`Config`]) and what every step of it shares ([`Setup`]):
-//! the D-NURBS model, the lattice sampled from its surface, Ω, the unit matrices `G_c` and the
-//! two fit problems of eq. (15).
+//! What a derivation starts from ([`Config`], with its [`Method`]) and what every step of it
+//! shares ([`Setup`]): the D-NURBS model, the lattice sampled from its surface or curve, Ω, the
+//! probes, and for the paper's derivation the two fit problems of eq. (15).
 
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material};
-use nurbspring_geom::NurbsSurface;
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_msm::{Class, Constants, LatticeOptions, MsmModel, SpringLattice};
 use nurbspring_sim::{IntegratorKind, RunOptions, State};
@@ -108,11 +107,59 @@ pub struct TimeSettings {
     pub msm_integrator: IntegratorKind,
 }
 
+/// Which derivation (scene key `fit.derivation`, `derive --derivation`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Class constants and node masses fitted to the lowest D-NURBS modes, then one mass
+    /// scale for the lowest frequency (docs/math.md §8.3; the default).
+    #[default]
+    Modal,
+    /// The paper's: eq. (15) and the eigenvalue scan of M (docs/math.md §6).
+    Paper,
+    /// The modal fit refined on the modes the scene's own loads and initial velocity excite.
+    Excitation,
+    /// The exact linear reduction of the D-NURBS onto the nodes (not an MSM: a reference).
+    Reduction,
+}
+
+impl Method {
+    /// Every derivation.
+    pub const ALL: [Method; 4] = [
+        Method::Modal,
+        Method::Paper,
+        Method::Excitation,
+        Method::Reduction,
+    ];
+
+    /// `"modal"`, `"paper"`, `"excitation"` or `"reduction"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Modal => "modal",
+            Method::Paper => "paper",
+            Method::Excitation => "excitation",
+            Method::Reduction => "reduction",
+        }
+    }
+
+    /// Parses a [`Method::name`].
+    pub fn parse(s: &str) -> Option<Method> {
+        Self::ALL.into_iter().find(|m| m.name() == s)
+    }
+
+    /// True for the derivations whose model is linear (validated by exact modes).
+    pub fn is_linear(self) -> bool {
+        self != Method::Paper
+    }
+}
+
 /// Everything a derivation needs (a scene, translated).
 #[derive(Clone, Debug)]
 pub struct Config {
-    /// The D-NURBS surface at t = 0.
-    pub surface: NurbsSurface,
+    /// The derivation.
+    pub method: Method,
+    /// The D-NURBS surface or curve at t = 0.
+    pub geometry: Geometry,
     /// Material.
     pub material: Material,
     /// Loads.
@@ -136,22 +183,29 @@ pub struct Config {
     pub given: Option<(Constants, f64)>,
 }
 
-/// The pieces shared by every step and every reading: model, lattice, Ω, unit matrices, fits.
+/// The two fit problems of eq. (15): every dof, free dofs.
+pub struct Fits {
+    all: StiffnessFit,
+    free: StiffnessFit,
+}
+
+/// The pieces shared by every step and every reading: model, lattice, Ω, probes; the fit
+/// problems of eq. (15) are built on first use.
 pub struct Setup {
     model: DnurbsModel,
     lattice: SpringLattice,
     omega: Omega,
-    fit_all: StiffnessFit,
-    fit_free: StiffnessFit,
+    fits: std::sync::OnceLock<Fits>,
     dnurbs_initial: State,
     nodes: NodeState,
-    probes: Vec<(f64, f64)>,
-    probe_omega: Omega,
     probe_nodes: Vec<usize>,
+    probe_params: Vec<(f64, f64)>,
+    probe_omega: Omega,
 }
 
 impl Setup {
-    /// Builds the model, the lattice, Ω, the unit matrices and both fit problems.
+    /// Builds the model, the lattice and Ω; each probe is watched at the lattice node nearest
+    /// to it, on the D-NURBS at that node's own parameters.
     pub fn new(config: &Config) -> Result<Self, DeriveError> {
         RunOptions::new(
             config.time.dt,
@@ -159,58 +213,72 @@ impl Setup {
             config.time.msm_integrator,
         )
         .validate(0.0)?;
-        let geometry = Geometry::Surface(config.surface.clone());
         let model = DnurbsModel::new(
-            geometry.clone(),
+            config.geometry.clone(),
             config.material.clone(),
             config.loads.clone(),
             &config.constraints,
             config.dnurbs.clone(),
         )?;
-        let lattice =
-            SpringLattice::from_surface(&config.surface, &config.lattice, model.fixed_points())?;
+        let lattice = match &config.geometry {
+            Geometry::Surface(s) => {
+                SpringLattice::from_surface(s, &config.lattice, model.fixed_points())?
+            }
+            Geometry::Curve(c) => {
+                SpringLattice::from_curve(c, &config.lattice, model.fixed_points())?
+            }
+        };
         let params = lattice
             .params
             .clone()
             .ok_or(DeriveError::LatticeWithoutParameters)?;
         let weights_as_dofs = config.dnurbs.weights_as_dofs;
-        let omega = Omega::new(&geometry, &params, weights_as_dofs)?;
-        let x0 = lattice.flat_positions();
-        let unit: Vec<(Class, SparseMatrix)> = lattice
-            .classes()
-            .into_iter()
-            .map(|class| (class, lattice.unit_stiffness(class, &x0)))
-            .collect();
-        let k_d = &model.matrices().stiffness;
-        let n_elements = lattice.springs.len();
-        let fit_all = StiffnessFit::new(k_d, omega.matrix(), &unit, n_elements, None)?;
-        let fit_free = StiffnessFit::new(
-            k_d,
-            omega.matrix(),
-            &unit,
-            n_elements,
-            Some(model.dof_map().free()),
-        )?;
+        let omega = Omega::new(&config.geometry, &params, weights_as_dofs)?;
         let dnurbs_initial = config.initial.state(&model);
         let nodes = omega.node_state(&model, &dnurbs_initial);
-        let probe_omega = Omega::new(&geometry, &config.probes, weights_as_dofs)?;
-        let probe_nodes = config
+        let probe_nodes: Vec<usize> = config
             .probes
             .iter()
             .map(|&(u, v)| lattice.node_nearest(u, v))
             .collect();
+        let probe_params: Vec<(f64, f64)> = probe_nodes.iter().map(|&a| params[a]).collect();
+        let probe_omega = Omega::new(&config.geometry, &probe_params, weights_as_dofs)?;
         Ok(Self {
             model,
             lattice,
             omega,
-            fit_all,
-            fit_free,
+            fits: std::sync::OnceLock::new(),
             dnurbs_initial,
             nodes,
-            probes: config.probes.clone(),
-            probe_omega,
             probe_nodes,
+            probe_params,
+            probe_omega,
         })
+    }
+
+    /// The fit problems of eq. (15), built on first use.
+    fn fits(&self) -> Result<&Fits, DeriveError> {
+        if let Some(f) = self.fits.get() {
+            return Ok(f);
+        }
+        let x0 = self.lattice.flat_positions();
+        let unit: Vec<(Class, SparseMatrix)> = self
+            .lattice
+            .classes()
+            .into_iter()
+            .map(|class| (class, self.lattice.unit_stiffness(class, &x0)))
+            .collect();
+        let k_d = &self.model.matrices().stiffness;
+        let n = self.lattice.n_elements();
+        let all = StiffnessFit::new(k_d, self.omega.matrix(), &unit, n, None)?;
+        let free = StiffnessFit::new(
+            k_d,
+            self.omega.matrix(),
+            &unit,
+            n,
+            Some(self.model.dof_map().free()),
+        )?;
+        Ok(self.fits.get_or_init(|| Fits { all, free }))
     }
 
     /// The D-NURBS model.
@@ -233,9 +301,25 @@ impl Setup {
         &self.nodes.velocities
     }
 
-    /// Probe parameters, the centre first.
+    /// The parameters the probes are watched at: those of their lattice nodes, the centre's
+    /// first.
     pub fn probes(&self) -> &[(f64, f64)] {
-        &self.probes
+        &self.probe_params
+    }
+
+    /// Ω of the probes (the D-NURBS points at the probe nodes' parameters).
+    pub fn probe_omega(&self) -> &Omega {
+        &self.probe_omega
+    }
+
+    /// The D-NURBS state at t = 0 (reduced coordinates).
+    pub fn dnurbs_initial(&self) -> &State {
+        &self.dnurbs_initial
+    }
+
+    /// The nodes' initial state (paper eqs. (11), (18)).
+    pub fn node_state(&self) -> &NodeState {
+        &self.nodes
     }
 
     /// The lattice node nearest each probe.
@@ -244,16 +328,17 @@ impl Setup {
     }
 
     /// The fit problem of a reading.
-    pub fn fit(&self, dofs: FitDofs) -> &StiffnessFit {
-        match dofs {
-            FitDofs::All => &self.fit_all,
-            FitDofs::Free => &self.fit_free,
-        }
+    pub fn fit(&self, dofs: FitDofs) -> Result<&StiffnessFit, DeriveError> {
+        let fits = self.fits()?;
+        Ok(match dofs {
+            FitDofs::All => &fits.all,
+            FitDofs::Free => &fits.free,
+        })
     }
 
     /// Solves one reading in closed form.
     pub fn solve(&self, dofs: FitDofs, nonnegative: bool) -> Result<FitResult, DeriveError> {
-        let fit = self.fit(dofs);
+        let fit = self.fit(dofs)?;
         let k = fit.solve(nonnegative)?;
         Ok(FitResult {
             constants: fit.constants(&k),
@@ -264,7 +349,8 @@ impl Setup {
     /// Residuals of eq. (15) at given constants, (every dof, free dofs).
     pub fn residuals_at(&self, constants: &Constants) -> Result<(f64, f64), DeriveError> {
         let at = |fit: &StiffnessFit| fit.relative_residual(&constants.values_of(fit.classes()));
-        Ok((at(&self.fit_all)?, at(&self.fit_free)?))
+        let fits = self.fits()?;
+        Ok((at(&fits.all)?, at(&fits.free)?))
     }
 
     /// The lattice with the given constants and uniform node mass.
@@ -310,16 +396,26 @@ impl Setup {
         force_unstable: bool,
         cancel: Option<Arc<AtomicBool>>,
     ) -> Result<Trajectory, DeriveError> {
-        let model = MsmModel::new(lattice)?;
-        let initial =
-            model.initial_state_displaced(&self.nodes.velocities, &self.nodes.displacements);
         let mut opts = RunOptions::new(dt, t_end, integrator);
         opts.force_unstable = force_unstable;
         opts.cancel = cancel;
+        self.run_msm_from(lattice, &self.nodes, &opts)
+    }
+
+    /// Runs an MSM on this setup's lattice from the node state `nodes`, recording the probe
+    /// nodes.
+    pub fn run_msm_from(
+        &self,
+        lattice: SpringLattice,
+        nodes: &NodeState,
+        opts: &RunOptions,
+    ) -> Result<Trajectory, DeriveError> {
+        let model = MsmModel::new(lattice)?;
+        let initial = model.initial_state_displaced(&nodes.velocities, &nodes.displacements);
         let watched = Watched::Msm {
             model: &model,
             nodes: &self.probe_nodes,
         };
-        record_noted(watched, initial, &opts)
+        record_noted(watched, initial, opts)
     }
 }

@@ -157,3 +157,93 @@ mod tests {
         assert!(c.rms.is_infinite());
     }
 }
+
+/// Compares two sampled point trajectories in 3-D (same times; the shorter length is used):
+/// `rms = √(mean |a − b|²)`, `max_abs = max |a − b|`, amplitude `max |a − a₀|`, relative RMS
+/// their ratio; periods of the coordinate in which the reference moves most. Non-finite
+/// samples of `other` make every error infinite.
+pub fn compare_points(t: &[f64], reference: &[[f64; 3]], other: &[[f64; 3]]) -> Comparison {
+    let n = t.len().min(reference.len()).min(other.len());
+    let (mut sum, mut max_abs) = (0.0, 0.0_f64);
+    for s in 0..n {
+        let d2: f64 = (0..3)
+            .map(|x| (reference[s][x] - other[s][x]).powi(2))
+            .sum();
+        if !d2.is_finite() {
+            sum = f64::INFINITY;
+            max_abs = f64::INFINITY;
+            break;
+        }
+        sum += d2;
+        max_abs = max_abs.max(d2.sqrt());
+    }
+    let rms = if n == 0 {
+        f64::NAN
+    } else {
+        (sum / n as f64).sqrt()
+    };
+    let a0 = reference.first().copied().unwrap_or([0.0; 3]);
+    let amplitude = reference[..n]
+        .iter()
+        .map(|a| ((a[0] - a0[0]).powi(2) + (a[1] - a0[1]).powi(2) + (a[2] - a0[2]).powi(2)).sqrt())
+        .fold(0.0, f64::max);
+    let axis = (0..3)
+        .max_by(|&x, &y| {
+            let span = |c: usize| {
+                reference[..n]
+                    .iter()
+                    .map(|a| (a[c] - a0[c]).abs())
+                    .fold(0.0, f64::max)
+            };
+            span(x).total_cmp(&span(y))
+        })
+        .unwrap_or(2);
+    let column = |v: &[[f64; 3]]| -> Vec<f64> { v[..n].iter().map(|p| p[axis]).collect() };
+    Comparison {
+        samples: n,
+        rms,
+        max_abs,
+        reference_amplitude: amplitude,
+        relative_rms: if amplitude > 0.0 {
+            rms / amplitude
+        } else {
+            f64::NAN
+        },
+        reference_period: dominant_period(&t[..n], &column(reference)),
+        other_period: dominant_period(&t[..n], &column(other)),
+    }
+}
+
+/// The modal assurance criterion `(aᵀb)² / ((aᵀa)(bᵀb))` of two mode shapes (1: the same
+/// shape up to scale, 0: orthogonal).
+pub fn mac(a: &[f64], b: &[f64]) -> f64 {
+    let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+    let (ab, aa, bb) = (dot(a, b), dot(a, a), dot(b, b));
+    if aa > 0.0 && bb > 0.0 {
+        ab * ab / (aa * bb)
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod point_tests {
+    use super::*;
+
+    #[test]
+    fn points_compare_in_three_dimensions() {
+        let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.05).collect();
+        let a: Vec<[f64; 3]> = t.iter().map(|t| [t.sin(), 0.0, 2.0]).collect();
+        // Off by 0.3 along y and 0.4 along z: |d| = 0.5 at every sample.
+        let b: Vec<[f64; 3]> = a.iter().map(|p| [p[0], 0.3, p[2] + 0.4]).collect();
+        let c = compare_points(&t, &a, &b);
+        assert!((c.rms - 0.5).abs() < 1e-15 && (c.max_abs - 0.5).abs() < 1e-15);
+        assert!((c.reference_amplitude - 1.0).abs() < 1e-3);
+        assert!(
+            c.reference_period
+                .is_some_and(|p| (p - 2.0 * std::f64::consts::PI).abs() < 0.05)
+        );
+        assert_eq!(mac(&[1.0, 2.0], &[-2.0, -4.0]), 1.0);
+        assert_eq!(mac(&[1.0, 0.0], &[0.0, 3.0]), 0.0);
+    }
+}

@@ -29,7 +29,7 @@ fn surface(curved: bool) -> NurbsSurface {
 fn lattice(s: &NurbsSurface, bending: bool, k: [f64; 3], grid: ParameterGrid) -> SpringLattice {
     let options = LatticeOptions {
         grid,
-        springs: Constants::from_pairs(
+        constants: Constants::from_pairs(
             [
                 (SpringKind::Structural, k[0]),
                 (SpringKind::Shear, k[1]),
@@ -95,6 +95,7 @@ fn recovers_known_constants() {
                 Class::Spring(SpringKind::Structural) => truth[0],
                 Class::Spring(SpringKind::Shear) => truth[1],
                 Class::Spring(SpringKind::Bend) => truth[2],
+                Class::Linear(..) => unreachable!("a spring lattice"),
             };
             assert!(
                 (k[i] - expected).abs() < 1e-11 * expected,

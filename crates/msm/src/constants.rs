@@ -9,13 +9,15 @@ use std::collections::BTreeMap;
 
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
-use crate::SpringKind;
+use crate::{LinearKind, Region, SpringKind};
 
 /// A class of elements sharing one constant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Class {
     /// The springs (paper eq. (5)) of one kind.
     Spring(SpringKind),
+    /// The linear isotropic elements of one kind in one region.
+    Linear(LinearKind, Region),
 }
 
 impl Class {
@@ -26,24 +28,46 @@ impl Class {
         Class::Spring(SpringKind::Bend),
     ];
 
-    /// The name of the class in files and messages: `"structural"`, `"shear"`, `"bend"`.
-    pub fn name(self) -> &'static str {
+    /// Every linear class of `kinds`, interior then boundary for each kind.
+    pub fn linear(kinds: &[LinearKind]) -> Vec<Class> {
+        kinds
+            .iter()
+            .flat_map(|&k| Region::ALL.map(|r| Class::Linear(k, r)))
+            .collect()
+    }
+
+    /// The name of the class in files and messages: `"structural"`, `"shear"`, `"bend"` for
+    /// springs, `"kind@region"` for linear elements (`"bend_u@boundary"`).
+    pub fn name(self) -> String {
         match self {
-            Class::Spring(kind) => kind.name(),
+            Class::Spring(kind) => kind.name().to_string(),
+            Class::Linear(kind, region) => format!("{}@{}", kind.name(), region.name()),
         }
     }
 
-    /// The symbol of its constant, as the paper writes it: `k_edge`, `k_diag`, `k_bend`.
+    /// Parses a [`Class::name`].
+    pub fn parse(s: &str) -> Option<Class> {
+        if let Some((kind, region)) = s.split_once('@') {
+            let region = Region::ALL.into_iter().find(|r| r.name() == region)?;
+            return Some(Class::Linear(LinearKind::parse(kind)?, region));
+        }
+        SpringKind::parse(s).map(Class::Spring)
+    }
+
+    /// The symbol of its constant: as the paper writes it for springs (`k_edge`, `k_diag`,
+    /// `k_bend`), the class name for linear elements.
     ///
     /// ```
-    /// use nurbspring_msm::{Class, SpringKind};
+    /// use nurbspring_msm::{Class, LinearKind, Region, SpringKind};
     /// assert_eq!(Class::Spring(SpringKind::Shear).symbol(), "k_diag");
+    /// assert_eq!(Class::Linear(LinearKind::BendU, Region::Boundary).symbol(), "bend_u@boundary");
     /// ```
-    pub fn symbol(self) -> &'static str {
+    pub fn symbol(self) -> String {
         match self {
-            Class::Spring(SpringKind::Structural) => "k_edge",
-            Class::Spring(SpringKind::Shear) => "k_diag",
-            Class::Spring(SpringKind::Bend) => "k_bend",
+            Class::Spring(SpringKind::Structural) => "k_edge".to_string(),
+            Class::Spring(SpringKind::Shear) => "k_diag".to_string(),
+            Class::Spring(SpringKind::Bend) => "k_bend".to_string(),
+            Class::Linear(..) => self.name(),
         }
     }
 }
@@ -51,13 +75,13 @@ impl Class {
 impl Serialize for Class {
     /// As its [`Class::name`].
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.name())
+        s.serialize_str(&self.name())
     }
 }
 
 impl std::fmt::Display for Class {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+        f.write_str(&self.name())
     }
 }
 
@@ -146,7 +170,7 @@ impl Serialize for Constants {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let mut map = s.serialize_map(Some(self.0.len()))?;
         for (class, k) in &self.0 {
-            map.serialize_entry(class.symbol(), k)?;
+            map.serialize_entry(&class.symbol(), k)?;
         }
         map.end()
     }

@@ -81,6 +81,16 @@ pub enum MsmError {
         /// Number of nodes.
         n_nodes: usize,
     },
+    /// A linear element that breaks a rule of [`crate::SpringLattice::validate`].
+    #[error("linear element {element}: invalid {what}: {value}")]
+    InvalidElement {
+        /// Element index.
+        element: usize,
+        /// What is wrong.
+        what: String,
+        /// The value.
+        value: f64,
+    },
     /// A NaN or infinite input value.
     #[error("{what} {index} is not finite ({value})")]
     NonFinite {

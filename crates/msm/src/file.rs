@@ -18,7 +18,9 @@ use nurbspring_sim::IntegratorKind;
 use serde::{Deserialize, Serialize};
 
 use crate::spring::{norm, sub};
-use crate::{MAX_NODES, MsmError, Spring, SpringKind, SpringLattice};
+use crate::{
+    Class, LinearElement, LinearKind, MAX_NODES, MsmError, Spring, SpringKind, SpringLattice,
+};
 
 /// One node of an [`MsmFile`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -37,6 +39,28 @@ pub struct NodeRecord {
     /// Surface parameters `(u, v)` it was sampled at, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uv: Option<[f64; 2]>,
+    /// A constant external force on the node besides gravity, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<[f64; 3]>,
+}
+
+/// One linear element of an [`MsmFile`]: energy `½ k weight |Σ coefficients_i u_{nodes_i}|²`
+/// on the displacements `u` of its nodes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ElementRecord {
+    /// `"spring_u"`, `"spring_v"`, `"diagonal"`, `"bend_u"`, `"bend_v"` or `"twist"`.
+    pub kind: LinearKind,
+    /// The class sharing its constant, `"kind@interior"` or `"kind@boundary"`.
+    pub class: String,
+    /// Its nodes (2 to 4).
+    pub nodes: Vec<usize>,
+    /// Class constant (≥ 0).
+    pub k: f64,
+    /// Weight (> 0).
+    pub weight: f64,
+    /// Stencil coefficients, one per node.
+    pub coefficients: Vec<f64>,
 }
 
 /// One spring of an [`MsmFile`].
@@ -81,6 +105,9 @@ pub struct MsmFile {
     pub nodes: Vec<NodeRecord>,
     /// Springs.
     pub springs: Vec<SpringRecord>,
+    /// Linear isotropic elements (none when left out).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub elements: Vec<ElementRecord>,
     /// Gravity g (default zero).
     #[serde(default)]
     pub gravity: [f64; 3],
@@ -148,6 +175,7 @@ impl SpringLattice {
                     fixed: self.fixed[a],
                     damping: self.damping[a],
                     uv: self.params.as_ref().map(|p| [p[a].0, p[a].1]),
+                    force: self.forces.get(a).copied(),
                 })
                 .collect(),
             springs: self
@@ -159,6 +187,18 @@ impl SpringLattice {
                     kind: s.kind,
                     k: s.k,
                     rest_length: Some(s.rest_length),
+                })
+                .collect(),
+            elements: self
+                .elements
+                .iter()
+                .map(|e| ElementRecord {
+                    kind: e.kind,
+                    class: e.class().name(),
+                    nodes: e.nodes.clone(),
+                    k: e.k,
+                    weight: e.weight,
+                    coefficients: e.coefficients.clone(),
                 })
                 .collect(),
             gravity: self.gravity,
@@ -225,7 +265,43 @@ impl SpringLattice {
                     .unwrap_or_else(|| norm(sub(positions[s.a], positions[s.b]))),
             });
         }
+        let mut elements = Vec::with_capacity(file.elements.len());
+        for (i, e) in file.elements.iter().enumerate() {
+            let region = match Class::parse(&e.class) {
+                Some(Class::Linear(kind, region)) if kind == e.kind => region,
+                _ => {
+                    return Err(MsmError::InvalidElement {
+                        element: i,
+                        what: format!(
+                            "class \"{}\" (expected \"{kind}@interior\" or \"{kind}@boundary\")",
+                            e.class,
+                            kind = e.kind.name()
+                        ),
+                        value: f64::NAN,
+                    });
+                }
+            };
+            elements.push(LinearElement {
+                kind: e.kind,
+                region,
+                nodes: e.nodes.clone(),
+                coefficients: e.coefficients.clone(),
+                weight: e.weight,
+                k: e.k,
+            });
+        }
+        let with_force = file.nodes.iter().filter(|r| r.force.is_some()).count();
+        let forces = if with_force == 0 {
+            Vec::new()
+        } else {
+            file.nodes
+                .iter()
+                .map(|r| r.force.unwrap_or([0.0; 3]))
+                .collect()
+        };
         let lattice = SpringLattice {
+            elements,
+            forces,
             masses: file.nodes.iter().map(|r| r.mass).collect(),
             damping: file.nodes.iter().map(|r| r.damping).collect(),
             fixed: file.nodes.iter().map(|r| r.fixed).collect(),

@@ -1,13 +1,16 @@
 //! Spring lattices: from a NURBS surface (docs/math.md §5, paper Figure 1 and eq. (19)) or from any
 //! node and spring lists.
 
-use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_geom::{KnotVector, NurbsCurve, NurbsSurface};
 use nurbspring_linalg::SparseMatrix;
 
+use crate::element::grid_elements;
 use crate::spring::sub;
 use crate::stiffness::Coefficient;
 use crate::topology::Topology;
-use crate::{Class, Constants, MAX_NODES, MsmError, Spring, SpringKind};
+use crate::{
+    Class, Constants, LinearElement, LinearKind, MAX_NODES, MsmError, Region, Spring, SpringKind,
+};
 
 /// Where the lattice nodes sit in the parameter domain.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -45,7 +48,7 @@ pub struct LatticeOptions {
     /// The spring classes to build, each with its constant: structural springs between grid
     /// neighbours along u and v (`k_edge`), shear springs on both diagonals of each cell
     /// (`k_diag`), bending springs between second neighbours along u and v (`k_bend`).
-    pub springs: Constants,
+    pub constants: Constants,
     /// Mass of every node.
     pub mass: f64,
     /// Damping factor `γ` of every node (force `−γ ẋ`, docs/math.md §5).
@@ -81,9 +84,9 @@ impl LatticeOptions {
                 });
             }
         };
-        for (class, k) in self.springs.iter() {
+        for (class, k) in self.constants.iter() {
             check(
-                class.symbol(),
+                &class.symbol(),
                 k,
                 k >= 0.0,
                 "spring constants must not be negative",
@@ -110,7 +113,7 @@ impl LatticeOptions {
         for (c, &g) in self.gravity.iter().enumerate() {
             check(&format!("gravity[{c}]"), g, true, "");
         }
-        if self.springs.is_empty() {
+        if self.constants.is_empty() {
             out.push(MsmError::NoSprings);
         }
         out
@@ -131,7 +134,7 @@ impl Default for LatticeOptions {
     fn default() -> Self {
         Self {
             grid: ParameterGrid::Knots,
-            springs: Constants::from_pairs([
+            constants: Constants::from_pairs([
                 (Class::Spring(SpringKind::Structural), 1.0),
                 (Class::Spring(SpringKind::Shear), 1.0),
             ]),
@@ -144,8 +147,8 @@ impl Default for LatticeOptions {
     }
 }
 
-/// A mass-spring model (paper eqs. (5)–(7)): nodes with masses, damping and fixed flags, and
-/// springs between them.
+/// A mass-spring model (paper eqs. (5)–(7)): nodes with masses, damping and fixed flags,
+/// springs between them, and linear isotropic elements (docs/math.md §8).
 ///
 /// Node positions are the initial (rest) positions. Generalized coordinates are interleaved
 /// `[x_0, y_0, z_0, x_1, …]` (docs/math.md §1); on a grid, node `a = i · n_v + j`.
@@ -161,6 +164,10 @@ pub struct SpringLattice {
     pub fixed: Vec<bool>,
     /// The springs.
     pub springs: Vec<Spring>,
+    /// The linear isotropic elements (docs/math.md §8).
+    pub elements: Vec<LinearElement>,
+    /// Constant external force on each node besides gravity (empty: none).
+    pub forces: Vec<[f64; 3]>,
     /// `(u, v)` of each node when sampled from a surface.
     pub params: Option<Vec<(f64, f64)>>,
     /// `(n_u, n_v)` when the nodes form a grid, node `a = i · n_v + j`.
@@ -196,40 +203,97 @@ impl SpringLattice {
     ) -> Result<Self, MsmError> {
         options.validate()?;
         let (us, vs) = options.grid.parameters(surface)?;
-        let (n_u, n_v) = (us.len(), vs.len());
-        let n = n_u.saturating_mul(n_v);
+        let n = us.len().saturating_mul(vs.len());
         if n > MAX_NODES {
             return Err(MsmError::TooLarge { nodes: n });
         }
         let positions = surface.grid(&us, &vs)?;
+        let fixed = match &options.fixed {
+            FixedNodes::Auto
+                if options.grid == ParameterGrid::Greville
+                    && (us.len(), vs.len()) == (surface.n_u(), surface.n_v()) =>
+            {
+                control_point_fixed(n, fixed_control_points)?
+            }
+            FixedNodes::Auto => auto_fixed(surface, &us, &vs, fixed_control_points)?,
+            FixedNodes::List(list) => listed_fixed(n, list)?,
+        };
+        Self::on_grid(&us, &vs, positions, fixed, options)
+    }
+
+    /// A chain of nodes `x_a = c(u_a)` on a curve (the one-parameter case of
+    /// [`SpringLattice::from_surface`]): springs and linear elements along u only; with
+    /// [`FixedNodes::Auto`] on the Greville grid node `a` is fixed when control point `a` is,
+    /// elsewhere when every control point with a non-zero basis value at `u_a` is.
+    pub fn from_curve(
+        curve: &NurbsCurve,
+        options: &LatticeOptions,
+        fixed_control_points: &[usize],
+    ) -> Result<Self, MsmError> {
+        options.validate()?;
+        let us = options.grid.parameters_along(curve.basis().knots())?;
+        let n = us.len();
+        let positions = us
+            .iter()
+            .map(|&u| curve.point(u))
+            .collect::<Result<Vec<_>, _>>()?;
+        let fixed = match &options.fixed {
+            FixedNodes::Auto
+                if options.grid == ParameterGrid::Greville && n == curve.n_control_points() =>
+            {
+                control_point_fixed(n, fixed_control_points)?
+            }
+            FixedNodes::Auto => {
+                let mut cp_fixed = vec![false; curve.n_control_points()];
+                for &k in fixed_control_points {
+                    if let Some(f) = cp_fixed.get_mut(k) {
+                        *f = true;
+                    }
+                }
+                let any = !fixed_control_points.is_empty();
+                us.iter()
+                    .map(|&u| Ok(any && support(curve.basis(), u)?.iter().all(|&k| cp_fixed[k])))
+                    .collect::<Result<Vec<bool>, MsmError>>()?
+            }
+            FixedNodes::List(list) => listed_fixed(n, list)?,
+        };
+        Self::on_grid(&us, &[0.0], positions, fixed, options)
+    }
+
+    /// The lattice on the tensor grid `us × vs` with these positions and fixed nodes.
+    fn on_grid(
+        us: &[f64],
+        vs: &[f64],
+        positions: Vec<[f64; 3]>,
+        fixed: Vec<bool>,
+        options: &LatticeOptions,
+    ) -> Result<Self, MsmError> {
+        let (n_u, n_v) = (us.len(), vs.len());
+        let n = n_u * n_v;
         let params: Vec<(f64, f64)> = us
             .iter()
             .flat_map(|&u| vs.iter().map(move |&v| (u, v)))
             .collect();
-        let fixed = match &options.fixed {
-            FixedNodes::Auto => auto_fixed(surface, &us, &vs, fixed_control_points)?,
-            FixedNodes::List(list) => {
-                let mut fixed = vec![false; n];
-                for (position, &node) in list.iter().enumerate() {
-                    if node >= n {
-                        return Err(MsmError::FixedNodeOutside {
-                            position,
-                            node,
-                            n_nodes: n,
-                        });
-                    }
-                    fixed[node] = true;
-                }
-                fixed
-            }
-        };
         let springs = grid_springs(n_u, n_v, options, &positions);
+        let kinds: Vec<LinearKind> = LinearKind::ALL
+            .into_iter()
+            .filter(|&k| {
+                Region::ALL
+                    .iter()
+                    .any(|&r| options.constants.contains(Class::Linear(k, r)))
+            })
+            .collect();
+        let elements = grid_elements(us, vs, &fixed, &kinds, &|kind, region| {
+            options.constants.value(Class::Linear(kind, region))
+        });
         let lattice = Self {
             positions,
             masses: vec![options.mass; n],
             damping: vec![options.damping; n],
             fixed,
             springs,
+            elements,
+            forces: Vec::new(),
             params: Some(params),
             grid: Some((n_u, n_v)),
             gravity: options.gravity,
@@ -258,6 +322,8 @@ impl SpringLattice {
             damping,
             fixed,
             springs,
+            elements: Vec::new(),
+            forces: Vec::new(),
             params: None,
             grid: None,
             gravity,
@@ -401,6 +467,63 @@ impl SpringLattice {
                 });
             }
         }
+        for (e, el) in self.elements.iter().enumerate() {
+            let bad = |what: String, value: f64| MsmError::InvalidElement {
+                element: e,
+                what,
+                value,
+            };
+            if !(2..=4).contains(&el.nodes.len()) || el.coefficients.len() != el.nodes.len() {
+                return Err(bad(
+                    format!(
+                        "{} nodes and {} coefficients (2 to 4 nodes, one coefficient each)",
+                        el.nodes.len(),
+                        el.coefficients.len()
+                    ),
+                    el.nodes.len() as f64,
+                ));
+            }
+            for (i, &a) in el.nodes.iter().enumerate() {
+                if a >= n {
+                    return Err(MsmError::MissingNode {
+                        spring: e,
+                        node: a,
+                        n_nodes: n,
+                    });
+                }
+                if el.nodes[..i].contains(&a) {
+                    return Err(bad(format!("node {a} listed twice"), a as f64));
+                }
+            }
+            if let Some(&c) = el.coefficients.iter().find(|c| !c.is_finite()) {
+                return Err(bad("coefficient (must be finite)".into(), c));
+            }
+            if !(el.weight.is_finite() && el.weight > 0.0) {
+                return Err(bad("weight (must be finite and > 0)".into(), el.weight));
+            }
+            if !(el.k.is_finite() && el.k >= 0.0) {
+                return Err(bad("constant k (must be finite and ≥ 0)".into(), el.k));
+            }
+        }
+        if !self.forces.is_empty() && self.forces.len() != n {
+            return Err(MsmError::LengthMismatch {
+                what: "node forces",
+                expected: n,
+                found: self.forces.len(),
+            });
+        }
+        if let Some((a, &v)) = self
+            .forces
+            .iter()
+            .enumerate()
+            .find_map(|(a, f)| f.iter().find(|x| !x.is_finite()).map(|v| (a, v)))
+        {
+            return Err(MsmError::NonFinite {
+                what: "force on node",
+                index: a,
+                value: v,
+            });
+        }
         Ok(())
     }
 
@@ -416,17 +539,28 @@ impl SpringLattice {
 
     /// The classes with at least one element, ascending.
     pub fn classes(&self) -> Vec<Class> {
-        Class::SPRINGS
-            .into_iter()
-            .filter(|&class| self.count(class) > 0)
-            .collect()
+        let mut out: Vec<Class> = self
+            .springs
+            .iter()
+            .map(|s| Class::Spring(s.kind))
+            .chain(self.elements.iter().map(LinearElement::class))
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
     }
 
     /// Number of elements of a class.
     pub fn count(&self, class: Class) -> usize {
         match class {
             Class::Spring(kind) => self.springs.iter().filter(|s| s.kind == kind).count(),
+            Class::Linear(..) => self.elements.iter().filter(|e| e.class() == class).count(),
         }
+    }
+
+    /// Number of springs and linear elements.
+    pub fn n_elements(&self) -> usize {
+        self.springs.len() + self.elements.len()
     }
 
     /// Sets the constant of every element of each class in `constants` (classes not in it are
@@ -435,6 +569,11 @@ impl SpringLattice {
         for s in &mut self.springs {
             if let Some(k) = constants.get(Class::Spring(s.kind)) {
                 s.k = k;
+            }
+        }
+        for e in &mut self.elements {
+            if let Some(k) = constants.get(e.class()) {
+                e.k = k;
             }
         }
     }
@@ -446,7 +585,39 @@ impl SpringLattice {
         for s in self.springs.iter().rev() {
             out.set(Class::Spring(s.kind), s.k);
         }
+        for e in self.elements.iter().rev() {
+            out.set(e.class(), e.k);
+        }
         out
+    }
+
+    /// The scalar `N × N` matrix `L = Σ_e k_e w_e c_e c_eᵀ` of the linear elements of `class`
+    /// with unit constants (`class = None`: every element with its own constant), so that
+    /// their stiffness is `L ⊗ I₃` (docs/math.md §8).
+    pub fn linear_matrix(&self, class: Option<Class>) -> SparseMatrix {
+        let mut triplets = Vec::new();
+        for e in &self.elements {
+            let scale = match class {
+                None => e.k * e.weight,
+                Some(c) if c == e.class() => e.weight,
+                Some(_) => continue,
+            };
+            for (&a, &ca) in e.nodes.iter().zip(&e.coefficients) {
+                for (&b, &cb) in e.nodes.iter().zip(&e.coefficients) {
+                    triplets.push((a, b, scale * ca * cb));
+                }
+            }
+        }
+        let n = self.n_nodes();
+        SparseMatrix::from_triplets(n, n, &triplets).expect("element nodes are validated")
+    }
+
+    /// Displacements `x − x(0)`, interleaved.
+    fn displacements(&self, x: &[f64]) -> Vec<f64> {
+        x.iter()
+            .zip(self.positions.iter().flatten())
+            .map(|(a, b)| a - b)
+            .collect()
     }
 
     /// Sets every node mass to `m` (not validated here).
@@ -519,11 +690,16 @@ impl SpringLattice {
         self.positions.iter().flatten().copied().collect()
     }
 
-    /// Gravity forces `m_a g` (paper eq. (6)), full `3N` vector.
+    /// External forces: gravity `m_a g` (paper eq. (6)) plus the node forces, full `3N`
+    /// vector.
     pub fn gravity_forces(&self) -> Vec<f64> {
         self.masses
             .iter()
-            .flat_map(|&m| self.gravity.map(|g| m * g))
+            .enumerate()
+            .flat_map(|(a, &m)| {
+                let f = self.forces.get(a).copied().unwrap_or([0.0; 3]);
+                [0, 1, 2].map(|x| m * self.gravity[x] + f[x])
+            })
             .collect()
     }
 
@@ -551,6 +727,17 @@ impl SpringLattice {
                 out[3 * s.b + c] -= f[c];
             }
         }
+        if !self.elements.is_empty() {
+            let u = self.displacements(x);
+            for e in &self.elements {
+                let s = e.strain(&u);
+                for (&a, &c) in e.nodes.iter().zip(&e.coefficients) {
+                    for x in 0..3 {
+                        out[3 * a + x] -= e.k * e.weight * c * s[x];
+                    }
+                }
+            }
+        }
     }
 
     /// Elastic energy `E = Σ k (|d| − l)² / 2` at positions `x` (docs/math.md §5). Panics when
@@ -562,7 +749,12 @@ impl SpringLattice {
             "positions: expected {} entries",
             self.n_dofs()
         );
-        self.springs.iter().map(|s| s.energy(x)).sum()
+        let springs: f64 = self.springs.iter().map(|s| s.energy(x)).sum();
+        if self.elements.is_empty() {
+            return springs;
+        }
+        let u = self.displacements(x);
+        springs + self.elements.iter().map(|e| e.energy(&u)).sum::<f64>()
     }
 
     /// The tangent stiffness `K_T = −∂f_elastic/∂x` at `x`, full `3N × 3N` (paper eqs. (9)–(10),
@@ -581,7 +773,11 @@ impl SpringLattice {
         let pattern = topology.pattern();
         let mut k = pattern.template.clone();
         topology.fill(&pattern, x, &Coefficient::Stiffness, k.values_mut());
-        k
+        if self.elements.is_empty() {
+            return k;
+        }
+        let l = self.linear_matrix(None).kron_identity(3);
+        SparseMatrix::linear_combination(1.0, &k, 1.0, &l).expect("both are 3N × 3N")
     }
 
     /// The unit-stiffness matrix `G_c` of one class at `x`: the tangent stiffness of the
@@ -589,7 +785,10 @@ impl SpringLattice {
     /// of eq. (9) are proportional to `k`). When every element of class `c` has constant `k_c`,
     /// `K_T = Σ_c k_c G_c` (docs/math.md §5). Same pattern as [`SpringLattice::tangent_stiffness`].
     pub fn unit_stiffness(&self, class: Class, x: &[f64]) -> SparseMatrix {
-        let Class::Spring(kind) = class;
+        let kind = match class {
+            Class::Spring(kind) => kind,
+            Class::Linear(..) => return self.linear_matrix(Some(class)).kron_identity(3),
+        };
         assert_eq!(
             x.len(),
             self.n_dofs(),
@@ -669,6 +868,52 @@ impl ParameterGrid {
     }
 }
 
+/// The fixed flags of an explicit node list.
+fn listed_fixed(n: usize, list: &[usize]) -> Result<Vec<bool>, MsmError> {
+    let mut fixed = vec![false; n];
+    for (position, &node) in list.iter().enumerate() {
+        if node >= n {
+            return Err(MsmError::FixedNodeOutside {
+                position,
+                node,
+                n_nodes: n,
+            });
+        }
+        fixed[node] = true;
+    }
+    Ok(fixed)
+}
+
+/// One node per control point (the Greville lattice): node `a` is fixed iff control point `a`
+/// is.
+fn control_point_fixed(n: usize, fixed_control_points: &[usize]) -> Result<Vec<bool>, MsmError> {
+    let mut fixed = vec![false; n];
+    for &k in fixed_control_points {
+        match fixed.get_mut(k) {
+            Some(f) => *f = true,
+            None => {
+                return Err(MsmError::InvalidParameter {
+                    name: format!("fixed control point index (the net has {n} control points)"),
+                    value: k as f64,
+                });
+            }
+        }
+    }
+    Ok(fixed)
+}
+
+/// Indices of the basis functions non-zero at `t`.
+fn support(basis: &nurbspring_geom::BSplineBasis, t: f64) -> Result<Vec<usize>, MsmError> {
+    let (span, values) = basis.values(t)?;
+    let p = basis.degree();
+    Ok(values
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.abs() > BASIS_ZERO)
+        .map(|(a, _)| span - p + a)
+        .collect())
+}
+
 /// docs/math.md §5 fixed rule on a tensor grid: node `(i, j)` is fixed when every control point
 /// `(k, l)` with `N_k(u_i) ≠ 0` and `N_l(v_j) ≠ 0` is fixed (weights are positive, so the
 /// rational basis value `R_kl` is non-zero exactly when `N_k N_l` is).
@@ -693,16 +938,6 @@ fn auto_fixed(
         }
         cp_fixed[k] = true;
     }
-    let support = |basis: &nurbspring_geom::BSplineBasis, t: f64| -> Result<Vec<usize>, MsmError> {
-        let (span, values) = basis.values(t)?;
-        let p = basis.degree();
-        Ok(values
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| v.abs() > BASIS_ZERO)
-            .map(|(a, _)| span - p + a)
-            .collect())
-    };
     let su: Vec<Vec<usize>> = us
         .iter()
         .map(|&u| support(surface.basis_u(), u))
@@ -729,7 +964,7 @@ fn auto_fixed(
 /// `(i, j)–(i+2, j)`; each group in node order.
 fn grid_springs(n_u: usize, n_v: usize, o: &LatticeOptions, positions: &[[f64; 3]]) -> Vec<Spring> {
     let idx = |i: usize, j: usize| i * n_v + j;
-    let has = |kind| o.springs.contains(Class::Spring(kind));
+    let has = |kind| o.constants.contains(Class::Spring(kind));
     let mut pairs: Vec<(usize, usize, SpringKind)> = Vec::new();
     if has(SpringKind::Structural) {
         for i in 0..n_u {
@@ -767,7 +1002,7 @@ fn grid_springs(n_u: usize, n_v: usize, o: &LatticeOptions, positions: &[[f64; 3
     pairs
         .into_iter()
         .map(|(a, b, kind)| {
-            let k = o.springs.value(Class::Spring(kind));
+            let k = o.constants.value(Class::Spring(kind));
             let length = crate::spring::norm(sub(positions[a], positions[b]));
             Spring {
                 a,

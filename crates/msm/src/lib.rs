@@ -24,7 +24,7 @@
 //!     (Class::Spring(SpringKind::Structural), 2.7225),
 //!     (Class::Spring(SpringKind::Shear), 0.8661),
 //! ]);
-//! let options = LatticeOptions { springs, mass: 0.005, ..Default::default() };
+//! let options = LatticeOptions { constants: springs, mass: 0.005, ..Default::default() };
 //! let lattice = SpringLattice::from_surface(&surface, &options, &fixed).unwrap();
 //! assert_eq!((lattice.n_nodes(), lattice.count(Class::Spring(SpringKind::Structural))), (15, 22));
 //! // The docs/math.md §5 rule leaves the three interior nodes free.
@@ -58,6 +58,7 @@
 //! once.
 
 mod constants;
+mod element;
 mod error;
 mod file;
 mod lattice;
@@ -67,8 +68,9 @@ mod stiffness;
 mod topology;
 
 pub use constants::{Class, Constants};
+pub use element::{LinearElement, LinearKind, Region};
 pub use error::MsmError;
-pub use file::{FileSimulation, MsmFile, NodeRecord, SpringRecord};
+pub use file::{ElementRecord, FileSimulation, MsmFile, NodeRecord, SpringRecord};
 pub use lattice::{FixedNodes, LatticeOptions, ParameterGrid, SpringLattice};
 pub use model::MsmModel;
 pub use spring::{Spring, SpringKind};

@@ -37,16 +37,20 @@ pub struct MsmModel {
     external: Vec<f64>,
     x0: Vec<f64>,
     q0: Vec<f64>,
+    /// `L_ff ⊗ I₃` of the linear elements on the free coordinates (`None` without elements).
+    linear: Option<SparseMatrix>,
 }
 
 impl MsmModel {
-    /// The integrators an MSM runs with.
-    pub const INTEGRATORS: [IntegratorKind; 5] = [
+    /// The integrators an MSM runs with (`modal`, its exact solution, only when it is linear
+    /// and undamped: a lattice of linear elements without springs).
+    pub const INTEGRATORS: [IntegratorKind; 6] = [
         IntegratorKind::SymplecticEuler,
         IntegratorKind::VelocityVerlet,
         IntegratorKind::Rk4,
         IntegratorKind::BackwardEuler,
         IntegratorKind::Newmark,
+        IntegratorKind::Modal,
     ];
 
     /// Why `integrator` cannot run an MSM; `None` when it can.
@@ -80,13 +84,13 @@ impl MsmModel {
             .iter()
             .any(|&g| g != 0.0)
             .then_some(SystemMatrix::Diagonal(gamma));
-        let g = lattice.gravity;
-        let external: Vec<f64> = free_nodes
-            .iter()
-            .flat_map(|&a| g.map(|gc| lattice.masses[a] * gc))
-            .collect();
+        let external = dof_map.restrict(&lattice.gravity_forces());
         let x0 = lattice.flat_positions();
         let q0 = dof_map.restrict(&x0);
+        let linear = (!lattice.elements.is_empty()).then(|| {
+            let l = lattice.linear_matrix(None);
+            l.submatrix(free_nodes, free_nodes).kron_identity(3)
+        });
         Ok(Self {
             lattice,
             dof_map,
@@ -97,6 +101,7 @@ impl MsmModel {
             external,
             x0,
             q0,
+            linear,
         })
     }
 
@@ -169,8 +174,21 @@ impl MsmModel {
     /// The unit-stiffness matrix `G_c` of one class on the free coordinates at `q` (so that
     /// `tangent_stiffness(q) = Σ_c k_c G_c` when every element of class `c` has constant `k_c`).
     pub fn unit_stiffness(&self, class: Class, q: &[f64]) -> SparseMatrix {
-        let Class::Spring(kind) = class;
-        self.assemble(q, &Coefficient::Unit(kind))
+        match class {
+            Class::Spring(kind) => self.assemble(q, &Coefficient::Unit(kind)),
+            Class::Linear(..) => {
+                let free = self.free_nodes();
+                self.lattice
+                    .linear_matrix(Some(class))
+                    .submatrix(free, free)
+                    .kron_identity(3)
+            }
+        }
+    }
+
+    /// True when the model has no springs: its force is linear, `f_int = (L_ff ⊗ I₃)(q − q₀)`.
+    pub fn is_linear(&self) -> bool {
+        self.lattice.springs.is_empty()
     }
 
     fn tangent_pattern(&self) -> &TangentPattern {
@@ -223,9 +241,13 @@ impl DynamicModel for MsmModel {
         let (x, _) = q.as_chunks::<3>();
         let (f, _) = out.as_chunks_mut::<3>();
         self.topology.internal_forces(x, f);
+        if let Some(l) = &self.linear {
+            let u: Vec<f64> = q.iter().zip(&self.q0).map(|(a, b)| a - b).collect();
+            l.mul_vec_add(1.0, &u, out);
+        }
     }
 
-    /// `f_ext = m_a g` on the free nodes (constant in time).
+    /// `f_ext = m_a g` plus the node forces, on the free nodes (constant in time).
     fn external_force(&self, _t: f64, out: &mut [f64]) {
         out.copy_from_slice(&self.external);
     }
@@ -234,14 +256,36 @@ impl DynamicModel for MsmModel {
     /// included), always with the same pattern.
     fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
         self.check_len("tangent_stiffness q", q.len());
-        self.assemble(q, &Coefficient::Stiffness)
+        match &self.linear {
+            Some(l) if self.is_linear() => l.clone(),
+            Some(l) => SparseMatrix::linear_combination(
+                1.0,
+                &self.assemble(q, &Coefficient::Stiffness),
+                1.0,
+                l,
+            )
+            .expect("both are on the free coordinates"),
+            None => self.assemble(q, &Coefficient::Stiffness),
+        }
+    }
+
+    /// `L_ff ⊗ I₃` when the model has no springs (docs/math.md §8).
+    fn linear_stiffness(&self) -> Option<&SparseMatrix> {
+        self.linear.as_ref().filter(|_| self.is_linear())
     }
 
     /// Elastic energy of every spring, those to fixed nodes included.
     fn potential_energy(&self, q: &[f64]) -> f64 {
         self.check_len("potential_energy q", q.len());
         let (x, _) = q.as_chunks::<3>();
-        self.topology.energy(x)
+        let springs = self.topology.energy(x);
+        match &self.linear {
+            None => springs,
+            Some(l) => {
+                let u: Vec<f64> = q.iter().zip(&self.q0).map(|(a, b)| a - b).collect();
+                springs + 0.5 * l.quadratic_form(&u)
+            }
+        }
     }
 
     /// `−(q − q_0)ᵀ f_ext`: the potential of the constant gravity load, zero at the initial

@@ -13,7 +13,7 @@ use support::{curved_lattice, curved_surface, paper_fixed_points, paper_surface}
 
 fn paper_lattice(greville: bool) -> SpringLattice {
     let options = LatticeOptions {
-        springs: Constants::from_pairs([
+        constants: Constants::from_pairs([
             (Class::Spring(SpringKind::Structural), 2.7225),
             (Class::Spring(SpringKind::Shear), 0.8661),
         ]),
@@ -125,7 +125,7 @@ fn grids_and_spring_counts() {
         );
         let o = LatticeOptions {
             grid,
-            springs,
+            constants: springs,
             ..Default::default()
         };
         let l = SpringLattice::from_surface(&s, &o, &[]).unwrap();
@@ -345,7 +345,7 @@ fn validation_errors() {
             ..Default::default()
         },
         LatticeOptions {
-            springs: Constants::from_pairs([(Class::Spring(SpringKind::Shear), -1.0)]),
+            constants: Constants::from_pairs([(Class::Spring(SpringKind::Shear), -1.0)]),
             ..Default::default()
         },
         LatticeOptions {
@@ -381,7 +381,7 @@ fn validation_errors() {
         "mass = 0: the node mass must be positive"
     );
     let no_springs = LatticeOptions {
-        springs: Constants::new(),
+        constants: Constants::new(),
         ..Default::default()
     };
     assert!(matches!(

@@ -2,10 +2,10 @@
 //! options of the MSM, the derivation's configuration. Model errors come back as
 //! [`Error::Model`] naming the file and, where one caused it, the key.
 
-use nurbspring_derive::{Config, FitOptions, InitialConditions, MassChoice, TimeSettings};
+use nurbspring_derive::{Config, FitOptions, InitialConditions, MassChoice, Method, TimeSettings};
 use nurbspring_dnurbs::{Constraints, DnurbsModel, Geometry, LinearConstraint, Loads, PointLoad};
 use nurbspring_msm::{
-    Class, Constants, FixedNodes, LatticeOptions, MsmError, ParameterGrid, SpringKind,
+    Class, Constants, FixedNodes, LatticeOptions, LinearKind, MsmError, ParameterGrid, SpringKind,
 };
 
 use crate::spec::*;
@@ -25,7 +25,7 @@ impl MsmOverrides {
     /// option as `flag(symbol)` (for example `--k-edge`, `--mass`).
     pub fn validate(&self, flag: &dyn Fn(&str) -> String) -> Result<(), Error> {
         let options = LatticeOptions {
-            springs: self.constants.clone(),
+            constants: self.constants.clone(),
             mass: self.mass.unwrap_or(1.0),
             ..LatticeOptions::default()
         };
@@ -52,11 +52,32 @@ pub fn spring_constants(m: &MsmSpec) -> Constants {
     )
 }
 
-/// `[msm]` as lattice options (fixed nodes by the automatic rule).
-pub(crate) fn lattice_options(m: &MsmSpec, gravity: [f64; 3]) -> LatticeOptions {
+/// The element classes of `[msm]` for a derivation: the springs of `structural`, `shear`,
+/// `bending` for the paper's (and for simulating the scene's own lattice), the linear
+/// elements of `elements` (both regions, unit constants) for the others; on a curve only the
+/// kinds along u.
+pub fn element_classes(m: &MsmSpec, method: Method, curve: bool) -> Constants {
+    if method == Method::Paper {
+        return spring_constants(m);
+    }
+    let kinds: Vec<LinearKind> = match &m.elements {
+        Some(k) => k.clone(),
+        None if curve => LinearKind::CHAIN.to_vec(),
+        None => LinearKind::ALL.to_vec(),
+    };
+    Constants::from_pairs(Class::linear(&kinds).into_iter().map(|c| (c, 1.0)))
+}
+
+/// `[msm]` as lattice options for `method` (fixed nodes by the automatic rule).
+pub(crate) fn lattice_options(
+    m: &MsmSpec,
+    gravity: [f64; 3],
+    method: Method,
+    curve: bool,
+) -> LatticeOptions {
     LatticeOptions {
-        grid: parameter_grid(m),
-        springs: spring_constants(m),
+        grid: parameter_grid(m, method),
+        constants: element_classes(m, method, curve),
         mass: m.mass,
         damping: m.damping,
         pre_strain: m.pre_strain,
@@ -65,9 +86,9 @@ pub(crate) fn lattice_options(m: &MsmSpec, gravity: [f64; 3]) -> LatticeOptions 
     }
 }
 
-/// `msm.grid` (with `nodes_u`, `nodes_v`).
-pub(crate) fn parameter_grid(m: &MsmSpec) -> ParameterGrid {
-    match m.grid {
+/// `msm.grid` (with `nodes_u`, `nodes_v`) for `method`.
+pub(crate) fn parameter_grid(m: &MsmSpec, method: Method) -> ParameterGrid {
+    match m.grid_for(method) {
         LatticeGrid::Knots => ParameterGrid::Knots,
         LatticeGrid::Uniform => ParameterGrid::Uniform {
             nodes_u: m.nodes_u,
@@ -228,11 +249,17 @@ impl Scene {
         Ok(out)
     }
 
-    /// The lattice options of `[msm]` with `overrides`, fixed nodes as the scene gives them.
-    pub fn lattice_options(&self, overrides: &MsmOverrides) -> Result<LatticeOptions, Error> {
-        let mut options = lattice_options(&self.msm, self.loads.gravity);
+    /// The lattice options of `[msm]` for `method` with `overrides`, fixed nodes as the scene
+    /// gives them.
+    pub fn lattice_options(
+        &self,
+        method: Method,
+        overrides: &MsmOverrides,
+    ) -> Result<LatticeOptions, Error> {
+        let curve = !self.geometry.is_surface();
+        let mut options = lattice_options(&self.msm, self.loads.gravity, method, curve);
         for (class, k) in overrides.constants.iter() {
-            options.springs.set(class, k);
+            options.constants.set(class, k);
         }
         if let Some(m) = overrides.mass {
             options.mass = m;
@@ -254,20 +281,21 @@ impl Scene {
         Ok(options)
     }
 
-    /// The derivation's configuration; the scene's `[msm]` constants and mass are kept as the
+    /// The derivation's configuration for `method` (`None`: the scene's `fit.derivation`);
+    /// for the paper's derivation the scene's `[msm]` constants and mass are kept as the
     /// "given" parameters, evaluated beside the derived ones.
-    pub fn derivation_config(&self) -> Result<Config, Error> {
-        let Geometry::Surface(surface) = self.build_geometry()? else {
-            return Err(self.needs_surface("deriving a mass-spring model"));
-        };
+    pub fn derivation_config(&self, method: Option<Method>) -> Result<Config, Error> {
+        let method = method.unwrap_or(self.fit.derivation);
+        let geometry = self.build_geometry()?;
         let fit = &self.fit;
         Ok(Config {
-            surface,
+            method,
+            geometry,
             material: self.material.clone(),
             loads: self.build_loads(),
             constraints: self.build_constraints(),
             dnurbs: self.dnurbs.clone(),
-            lattice: self.lattice_options(&MsmOverrides::default())?,
+            lattice: self.lattice_options(method, &MsmOverrides::default())?,
             initial: self.initial_conditions(),
             time: self.time_settings(),
             fit: FitOptions {
@@ -281,7 +309,7 @@ impl Scene {
                 max_candidates: fit.max_candidates,
             },
             probes: self.probe_params()?,
-            given: Some((spring_constants(&self.msm), self.msm.mass)),
+            given: (method == Method::Paper).then(|| (spring_constants(&self.msm), self.msm.mass)),
         })
     }
 }

@@ -36,6 +36,7 @@
 mod build;
 mod error;
 pub mod export;
+pub mod markdown;
 pub mod msm_file;
 mod parse;
 pub mod report;

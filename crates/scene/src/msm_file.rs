@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use nurbspring_derive::Omega;
+use nurbspring_derive::{Method, Omega};
 use nurbspring_dnurbs::Geometry;
 use nurbspring_msm::{FileSimulation, MsmFile, MsmModel, SpringLattice};
 use nurbspring_sim::{IntegratorKind, State};
@@ -119,7 +119,7 @@ impl Scene {
         let Geometry::Surface(surface) = model.geometry() else {
             return Err(self.needs_surface("the mass-spring model"));
         };
-        let options = self.lattice_options(overrides)?;
+        let options = self.lattice_options(Method::Paper, overrides)?;
         let lattice = SpringLattice::from_surface(surface, &options, model.fixed_points())
             .map_err(|e| self.model_error(Some("msm"), e))?;
         let params = lattice.params.clone().unwrap_or_default();

@@ -92,12 +92,20 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
             "mass",
             "damping",
             "pre_strain",
+            "elements",
             "fixed",
         ],
     ),
     (
         "fit",
-        &["dofs", "nonnegative", "method", "mass", "max_candidates"],
+        &[
+            "derivation",
+            "dofs",
+            "nonnegative",
+            "method",
+            "mass",
+            "max_candidates",
+        ],
     ),
     ("output", &["vtk_every"]),
 ];

@@ -1,22 +1,23 @@
-//! Derivation results → files: `msm.json`, `report.json` (serde from the typed results, with
-//! the inputs that produced them, so a report stands on its own), `report.md`,
-//! `central_node.csv`, plots, and the lattice as VTK and OBJ; the paper's verdict table.
+//! Derivation results → files: `msm.json` (or `reduction.json`), `report.json` (serde from
+//! the typed results, with the inputs that produced them, so a report stands on its own),
+//! `report.md`, `central_node.csv`, plots, and the lattice as VTK and OBJ.
 
-use std::fmt::Write as _;
 use std::path::Path;
 
 use nurbspring_derive::paper::PaperReport;
 use nurbspring_derive::{
-    Derivation, FitReport, FitResult, InitialConditions, MassReport, ParameterSet, Spectrum,
-    TimeSettings, ValidationReport,
+    Derivation, FitDetail, FrequencyRow, InitialConditions, MassReport, Method, NodeReduction,
+    ParameterSet, Spectrum, TimeSettings, Trajectory, Validation,
 };
 use nurbspring_dnurbs::{DnurbsOptions, Loads, Material};
 use nurbspring_io::output::{write_csv, write_json};
 use nurbspring_io::plot::{PlotOptions, Series, plot_series_with, plot_spectrum};
 use nurbspring_msm::{Class, Constants, FileSimulation, SpringKind};
+use nurbspring_sim::IntegratorKind;
 use serde::Serialize;
 
 use crate::export::{write_lattice_obj, write_lattice_vtu};
+use crate::markdown::report_markdown;
 use crate::msm_file::msm_file;
 use crate::spec::{ConstraintsSpec, FitSpec, MsmSpec};
 use crate::{Error, Scene};
@@ -45,7 +46,7 @@ pub struct Inputs<'a> {
 /// One probe: its parameters and the lattice node that stands for it.
 #[derive(Serialize)]
 pub struct Probe {
-    /// Parameter u.
+    /// Parameter u (of the node, where the D-NURBS is watched).
     pub u: f64,
     /// Parameter v.
     pub v: f64,
@@ -58,26 +59,34 @@ pub struct Probe {
 pub struct Report<'a> {
     /// The scene it came from.
     pub scene: &'a str,
+    /// The derivation.
+    pub derivation: Method,
     /// What produced it.
     pub inputs: Inputs<'a>,
-    /// The stiffness fit of eq. (15), every reading.
-    pub fit: &'a FitReport,
-    /// The mass step.
+    /// The fit.
+    pub fit: &'a FitDetail,
+    /// The masses and their totals.
     pub mass: &'a MassReport,
     /// The derived parameters, their stability and validation.
     pub derived: &'a ParameterSet,
-    /// The derived MSM's validation (as in `derived`).
-    pub validation: &'a ValidationReport,
+    /// The derived model's validation (as in `derived`).
+    pub validation: &'a Validation,
+    /// The validation under an impulse the model was not derived for.
+    pub second_excitation: &'a Validation,
+    /// The lowest frequencies of both models.
+    pub frequencies: &'a [FrequencyRow],
     /// Frequencies of both models.
     pub spectrum: &'a Spectrum,
     /// Probe points.
     pub probes: Vec<Probe>,
-    /// The scene's own `[msm]` parameters, evaluated the same way.
+    /// The scene's own `[msm]` parameters, evaluated the same way (the paper's derivation).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper_parameters: Option<&'a ParameterSet>,
     /// The paper's reproduction (`nurbspring paper` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper: Option<&'a PaperReport>,
+    /// Every sign of a bad model.
+    pub warnings: &'a [String],
 }
 
 impl<'a> Report<'a> {
@@ -90,6 +99,7 @@ impl<'a> Report<'a> {
     ) -> Self {
         Self {
             scene: scene_label,
+            derivation: d.method,
             inputs: Inputs {
                 material: &scene.material,
                 loads: scene.build_loads(),
@@ -104,6 +114,8 @@ impl<'a> Report<'a> {
             mass: &d.mass,
             derived: &d.derived,
             validation: &d.derived.validation,
+            second_excitation: &d.second_excitation,
+            frequencies: &d.frequencies,
             spectrum: &d.spectrum,
             probes: d
                 .probes
@@ -113,7 +125,77 @@ impl<'a> Report<'a> {
                 .collect(),
             paper_parameters: d.given.as_ref(),
             paper,
+            warnings: &d.warnings,
         }
+    }
+}
+
+/// `reduction.json`: the node-space model `M_T ẍ + (γ/μ) M_T ẋ + K_T x = F_T` of the
+/// `reduction` derivation, scalar and the same in x, y and z, on the free nodes.
+#[derive(Serialize)]
+pub struct ReductionFile<'a> {
+    /// The scene.
+    pub scene: &'a str,
+    /// `"exact"` (one free node per free control point) or `"guyan"`.
+    pub kind: &'static str,
+    /// What the matrices act on.
+    pub ordering: &'static str,
+    /// Every node: rest position, parameters, fixed flag.
+    pub nodes: Vec<ReductionNode>,
+    /// The free nodes, in the order of the matrices' rows.
+    pub free: &'a [usize],
+    /// `K_T`, row by row.
+    pub stiffness: Vec<Vec<f64>>,
+    /// `M_T`, row by row.
+    pub mass: Vec<Vec<f64>>,
+    /// `γ/μ`.
+    pub damping_ratio: f64,
+    /// `F_T` per free node.
+    pub loads: &'a [[f64; 3]],
+    /// Initial node velocities `Ω ṗ(0)`, every node.
+    pub initial_velocities: &'a [[f64; 3]],
+}
+
+/// One node of `reduction.json`.
+#[derive(Serialize)]
+pub struct ReductionNode {
+    /// Rest position.
+    pub position: [f64; 3],
+    /// Parameters.
+    pub uv: [f64; 2],
+    /// Held at its rest position.
+    pub fixed: bool,
+}
+
+fn reduction_file<'a>(
+    scene: &'a str,
+    r: &'a NodeReduction,
+    velocities: &'a [[f64; 3]],
+) -> ReductionFile<'a> {
+    let rows = |m: &nurbspring_linalg::DenseMatrix| -> Vec<Vec<f64>> {
+        (0..m.nrows()).map(|i| m.row(i).to_vec()).collect()
+    };
+    ReductionFile {
+        scene,
+        kind: if r.guyan { "guyan" } else { "exact" },
+        ordering: "scalar matrices on the free nodes: the same K_T, M_T act on the x, y and z displacements",
+        nodes: r
+            .positions
+            .iter()
+            .zip(&r.params)
+            .enumerate()
+            .map(|(a, (&position, &(u, v)))| ReductionNode {
+                position,
+                uv: [u, v],
+                fixed: r.free.binary_search(&a).is_err(),
+            })
+            .collect(),
+        free: &r.free,
+        stiffness: rows(&r.stiffness),
+        mass: rows(&r.mass),
+        damping_ratio: r.damping_ratio,
+        loads: &r.loads,
+        initial_velocities: velocities,
     }
 }
 
@@ -141,9 +223,20 @@ pub fn constants_text(constants: &Constants, precision: usize) -> String {
         .join(", ")
 }
 
-/// Writes msm.json, report.json, report.md, central_node.csv, the plots and the lattice into
-/// `out` (each file atomically). `paper_table` is the text of the reproduction table (empty
-/// unless this is the paper's experiment).
+/// How the derived MSM is run by `simulate msm.json`: as it was validated.
+fn run_settings(scene: &Scene, d: &Derivation) -> FileSimulation {
+    let time = scene.time_settings();
+    FileSimulation {
+        dt: time.dt,
+        t_end: time.t_end,
+        integrator: IntegratorKind::parse(&d.derived.validation.integrator)
+            .unwrap_or(IntegratorKind::Newmark),
+    }
+}
+
+/// Writes msm.json (or reduction.json), report.json, report.md, central_node.csv, the plots
+/// and the lattice into `out` (each file atomically). `paper_table` is the text of the
+/// reproduction table (empty unless this is the paper's experiment).
 pub fn write_derivation(
     out: &Path,
     scene_label: &str,
@@ -152,40 +245,49 @@ pub fn write_derivation(
     paper: Option<&PaperReport>,
     paper_table: &str,
 ) -> Result<(), Error> {
-    let time = scene.time_settings();
-    let msm = msm_file(
-        &d.lattice,
-        scene_label,
-        &d.node_velocities,
-        FileSimulation {
-            dt: time.dt,
-            t_end: time.t_end,
-            integrator: d.derived.validation.integrator,
-        },
-    );
-    write_json(out.join("msm.json"), &msm)?;
+    if let Some(lattice) = &d.lattice {
+        let msm = msm_file(
+            lattice,
+            scene_label,
+            &d.node_velocities,
+            run_settings(scene, d),
+        );
+        write_json(out.join("msm.json"), &msm)?;
+        write_lattice_obj(&out.join("lattice.obj"), lattice)?;
+        write_lattice_vtu(&out.join("lattice.vtu"), lattice)?;
+    }
+    if let Some(r) = &d.reduction {
+        write_json(
+            out.join("reduction.json"),
+            &reduction_file(scene_label, r, &d.node_velocities),
+        )?;
+    }
     write_json(
         out.join("report.json"),
         &Report::new(scene_label, scene, d, paper),
     )?;
     write_central_node(out, d)?;
-    write_plots(out, d)?;
-    write_lattice_obj(&out.join("lattice.obj"), &d.lattice)?;
-    write_lattice_vtu(&out.join("lattice.vtu"), &d.lattice)?;
+    write_plots(out, scene_label, d)?;
     let md = report_markdown(scene_label, d, paper_table);
     nurbspring_io::atomic::write_atomic_bytes(out.join("report.md"), md.as_bytes())?;
     Ok(())
 }
 
-/// `central_node.csv`: t, D-NURBS z, MSM z.
+/// `central_node.csv`: t, then the D-NURBS point and the MSM node, x, y, z.
 fn write_central_node(out: &Path, d: &Derivation) -> Result<(), Error> {
     let t = &d.dnurbs_trajectory.t;
-    let zd = d.dnurbs_trajectory.component(0, 2);
-    let zm = d.msm_trajectory.component(0, 2);
-    let rows = (0..t.len()).map(|s| vec![t[s], zd[s], zm.get(s).copied().unwrap_or(f64::NAN)]);
+    let (a, b) = (&d.dnurbs_trajectory.probes[0], &d.msm_trajectory.probes[0]);
+    let rows = (0..t.len().min(a.len()).min(b.len())).map(|s| {
+        let mut row = vec![t[s]];
+        row.extend_from_slice(&a[s]);
+        row.extend_from_slice(&b[s]);
+        row
+    });
     write_csv(
         out.join("central_node.csv"),
-        &["t", "dnurbs_z", "msm_z"],
+        &[
+            "t", "dnurbs_x", "dnurbs_y", "dnurbs_z", "msm_x", "msm_y", "msm_z",
+        ],
         rows,
     )?;
     Ok(())
@@ -195,14 +297,32 @@ fn xy(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
     t.iter().copied().zip(y.iter().copied()).collect()
 }
 
+/// The coordinate in which the D-NURBS central point moves most.
+fn main_axis(traj: &Trajectory) -> usize {
+    let p = &traj.probes[0];
+    let p0 = p.first().copied().unwrap_or([0.0; 3]);
+    (0..3)
+        .max_by(|&x, &y| {
+            let span = |c: usize| p.iter().map(|q| (q[c] - p0[c]).abs()).fold(0.0, f64::max);
+            span(x).total_cmp(&span(y))
+        })
+        .unwrap_or(2)
+}
+
 /// central_node, mass_scan, energy and spectrum plots, SVG and PNG.
-fn write_plots(out: &Path, d: &Derivation) -> Result<(), Error> {
+fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Error> {
+    let axis = main_axis(&d.dnurbs_trajectory);
+    let name = ["x", "y", "z"][axis];
     let t = &d.dnurbs_trajectory.t;
     let mut series = vec![
-        Series::line("D-NURBS", xy(t, &d.dnurbs_trajectory.component(0, 2))),
+        Series::line("D-NURBS", xy(t, &d.dnurbs_trajectory.component(0, axis))),
         Series::line(
-            format!("derived MSM ({})", d.derived.validation.integrator),
-            xy(t, &d.msm_trajectory.component(0, 2)),
+            format!(
+                "derived MSM, {} ({})",
+                d.method.name(),
+                d.derived.validation.integrator
+            ),
+            xy(&d.msm_trajectory.t, &d.msm_trajectory.component(0, axis)),
         ),
     ];
     if let (Some(g), Some(gt)) = (&d.given, &d.given_trajectory) {
@@ -215,16 +335,16 @@ fn write_plots(out: &Path, d: &Derivation) -> Result<(), Error> {
                 g.m,
                 g.validation.integrator
             ),
-            xy(&gt.t, &gt.component(0, 2)),
+            xy(&gt.t, &gt.component(0, axis)),
         ));
     }
-    let title = "Central node z(t): D-NURBS vs MSM (paper Figure 3)";
+    let title = format!("Central node {name}(t) of {scene_label}: D-NURBS vs MSM");
     for ext in ["svg", "png"] {
         plot(
             &out.join(format!("central_node.{ext}")),
-            title,
+            &title,
             "t [s]",
-            "z [m]",
+            &format!("{name} [m]"),
             &series,
             false,
         )?;
@@ -248,32 +368,40 @@ fn write_plots(out: &Path, d: &Derivation) -> Result<(), Error> {
             )?;
         }
     }
-    let total = |traj: &nurbspring_derive::Trajectory| -> Vec<(f64, f64)> {
+    let total = |traj: &Trajectory| -> Vec<(f64, f64)> {
         traj.t
             .iter()
             .zip(&traj.energy)
             .map(|(t, e)| (*t, e[0] + e[1]))
             .collect()
     };
-    let energy = vec![
-        Series::line("D-NURBS kinetic + elastic", total(&d.dnurbs_trajectory)),
-        Series::line("derived MSM kinetic + elastic", total(&d.msm_trajectory)),
-    ];
-    for ext in ["svg", "png"] {
-        plot(
-            &out.join(format!("energy.{ext}")),
-            "Energy over time",
-            "t [s]",
-            "energy [J]",
-            &energy,
-            false,
-        )?;
+    let energy: Vec<Series> = [
+        ("D-NURBS kinetic + elastic", &d.dnurbs_trajectory),
+        ("derived MSM kinetic + elastic", &d.msm_trajectory),
+    ]
+    .into_iter()
+    .filter(|(_, t)| !t.energy.is_empty())
+    .map(|(name, t)| Series::line(name, total(t)))
+    .collect();
+    if !energy.is_empty() {
+        for ext in ["svg", "png"] {
+            plot(
+                &out.join(format!("energy.{ext}")),
+                &format!("Energy over time, {scene_label}"),
+                "t [s]",
+                "energy [J]",
+                &energy,
+                false,
+            )?;
+        }
     }
     if !d.spectrum.dnurbs.is_empty() {
         for ext in ["svg", "png"] {
             plot_spectrum(
                 out.join(format!("spectrum.{ext}")),
-                "Angular frequencies: D-NURBS vs derived MSM (linearized at rest)",
+                &format!(
+                    "Angular frequencies of {scene_label}: D-NURBS vs derived MSM (linearized at rest)"
+                ),
                 "omega [rad/s]",
                 &[
                     ("D-NURBS", &d.spectrum.dnurbs),
@@ -283,202 +411,4 @@ fn write_plots(out: &Path, d: &Derivation) -> Result<(), Error> {
         }
     }
     Ok(())
-}
-
-fn fmt_k(f: &FitResult, class: Class) -> String {
-    f.constants
-        .get(class)
-        .map(|k| format!("{k:.6}"))
-        .unwrap_or_else(|| "-".into())
-}
-
-fn fmt_period(p: Option<f64>) -> String {
-    p.map(|x| format!("{x:.3}")).unwrap_or_else(|| "-".into())
-}
-
-fn param_row(s: &mut String, label: &str, p: &ParameterSet) {
-    let v = &p.validation;
-    let _ = writeln!(
-        s,
-        "| {label} | {:.6} | {:.6} | {:.6} | {:.5} | {} | {:.4} | {:.4} | {} | {:.4e} | {:.4} | {} / {} |",
-        p.constants.value(Class::Spring(SpringKind::Structural)),
-        p.constants.value(Class::Spring(SpringKind::Shear)),
-        p.m,
-        p.dt_critical,
-        if p.dt_exceeds_explicit_limit {
-            "yes"
-        } else {
-            "no"
-        },
-        p.relative_residual_all_dofs,
-        p.relative_residual_free_dofs,
-        v.integrator,
-        v.rms,
-        v.relative_rms,
-        fmt_period(v.dnurbs_period),
-        fmt_period(v.msm_period),
-    );
-}
-
-/// `report.md`: the fit readings, the mass scan, the parameters with their stability and
-/// validation, and the paper's table when given.
-pub fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# nurbspring derivation report\n\nScene: `{scene_label}`\n"
-    );
-    let _ = writeln!(s, "## Stiffness fit (paper eq. 15)\n");
-    let _ = writeln!(
-        s,
-        "| reading | k_edge | k_diag | k_bend | relative residual |\n|---|---|---|---|---|"
-    );
-    for (name, f) in [
-        ("all dofs, unconstrained (literal)", &d.fit.all_dofs),
-        ("free dofs, unconstrained", &d.fit.free_dofs),
-        ("all dofs, k >= 0", &d.fit.all_dofs_nonnegative),
-        ("free dofs, k >= 0", &d.fit.free_dofs_nonnegative),
-        (
-            "trust region (selected reading)",
-            &d.fit.trust_region.result,
-        ),
-    ] {
-        let _ = writeln!(
-            s,
-            "| {name} | {} | {} | {} | {:.6} |",
-            fmt_k(f, Class::Spring(SpringKind::Structural)),
-            fmt_k(f, Class::Spring(SpringKind::Shear)),
-            fmt_k(f, Class::Spring(SpringKind::Bend)),
-            f.relative_residual
-        );
-    }
-    let _ = writeln!(
-        s,
-        "\nSelected: {}. Trust region: {} iterations, largest relative difference to the closed form {:.2e}.\n",
-        d.fit.selected_reading,
-        d.fit.trust_region.iterations,
-        d.fit.trust_region.max_relative_difference_to_closed_form
-    );
-    let _ = writeln!(s, "## Mass (Section III)\n\n{}.\n", d.mass.rule);
-    let _ = writeln!(
-        s,
-        "Distinct non-null eigenvalues of M ({}): {}\n",
-        d.mass.eigenvalues.len(),
-        d.mass
-            .eigenvalues
-            .iter()
-            .map(|v| format!("{v:.6}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    if !d.mass.candidates.is_empty() {
-        let _ = writeln!(
-            s,
-            "| m | RMS | max abs | integrator | note |\n|---|---|---|---|---|"
-        );
-        for c in &d.mass.candidates {
-            let _ = writeln!(
-                s,
-                "| {:.6} | {:.4e} | {:.4e} | {} | {} |",
-                c.m,
-                c.rms,
-                c.max_abs,
-                c.integrator,
-                c.stopped.as_deref().unwrap_or("")
-            );
-        }
-    }
-    let _ = writeln!(s, "\nSelected mass: **{:.6}**\n", d.mass.selected);
-    let _ = writeln!(s, "## Parameters, stability and validation (Figure 3)\n");
-    let _ = writeln!(
-        s,
-        "| parameters | k_edge | k_diag | m | dt_critical | dt over limit | residual (all) | residual (free) | integrator | RMS | rel. RMS | periods D-NURBS / MSM |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
-    );
-    param_row(&mut s, "derived", &d.derived);
-    if let Some(g) = &d.given {
-        param_row(&mut s, "scene's", g);
-    }
-    for (label, p) in [("derived", Some(&d.derived)), ("scene's", d.given.as_ref())] {
-        if let Some(e) = p.and_then(|p| p.explicit_run.as_ref()) {
-            let _ = writeln!(
-                s,
-                "\nThe scene's explicit integrator ({}) with the {label} parameters: {}",
-                e.integrator,
-                e.msm_stopped.as_deref().unwrap_or("finished")
-            );
-        }
-    }
-    if !paper_table.is_empty() {
-        let _ = writeln!(
-            s,
-            "\n## Reproduction of the paper\n\n```text\n{paper_table}```"
-        );
-    }
-    s
-}
-
-/// The human table of the reproduction: each paper number, what nurbspring obtains, the
-/// verdict; then every reading of the fit and every side-by-side run.
-pub fn verdict_table(report: &PaperReport) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "Reproduction of Section IV (paper value | nurbspring | verdict)"
-    );
-    let _ = writeln!(s, "{}", "=".repeat(78));
-    for v in &report.verdicts {
-        let _ = writeln!(s, "{}", v.quantity);
-        let _ = writeln!(s, "  paper:    {}", v.paper);
-        let _ = writeln!(s, "  obtained: {}", v.obtained);
-        let _ = writeln!(s, "  verdict:  {} - {}", v.verdict.label(), v.why);
-    }
-    let _ = writeln!(s, "{}", "-".repeat(78));
-    let _ = writeln!(
-        s,
-        "Stiffness fit, every reading (net, dofs, norm, constraint: k_edge, k_diag, relative residual; the same at the paper's k)"
-    );
-    for f in &report.fits {
-        let k = |class| f.result.constants.value(class);
-        let _ = writeln!(
-            s,
-            "  {:<8} {:<4} {:<9} {:<13} k_edge = {:>10.5}  k_diag = {:>10.5}  residual = {:.4}  (paper's k: {:.4})",
-            f.net.name(),
-            f.dofs.name(),
-            f.norm.name(),
-            if f.nonnegative {
-                "k >= 0"
-            } else {
-                "unconstrained"
-            },
-            k(Class::Spring(SpringKind::Structural)),
-            k(Class::Spring(SpringKind::Shear)),
-            f.result.relative_residual,
-            f.residual_at_paper_values
-        );
-    }
-    let _ = writeln!(
-        s,
-        "Side-by-side runs, central node z (net, rest shape, parameters, integrator, horizon: dt_crit, rel. RMS, periods D-NURBS/MSM)"
-    );
-    for d in &report.dynamics {
-        let _ = writeln!(
-            s,
-            "  {:<8} rest={:<7} {:<7} {:<16} {:>4} s  dt_crit = {:.4}  rel.RMS = {:>9.4}  T = {} / {}{}",
-            d.net.name(),
-            d.rest_shape.name(),
-            d.parameters.name(),
-            d.integrator.name(),
-            d.t_end,
-            d.dt_critical,
-            d.relative_rms,
-            fmt_period(d.dnurbs_period),
-            fmt_period(d.msm_period),
-            if d.msm_stopped.is_some() {
-                "  (MSM run stopped: diverged)"
-            } else {
-                ""
-            }
-        );
-    }
-    s
 }

@@ -6,8 +6,9 @@
 
 use std::path::PathBuf;
 
-use nurbspring_derive::{FitDofs, FitMethod};
+use nurbspring_derive::{FitDofs, FitMethod, Method};
 use nurbspring_dnurbs::{DnurbsOptions, Material};
+use nurbspring_msm::LinearKind;
 use nurbspring_sim::IntegratorKind;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::ser::Serializer;
@@ -273,8 +274,10 @@ impl Default for SimulationSpec {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MsmSpec {
-    /// Where the nodes sit in parameter space.
-    pub grid: LatticeGrid,
+    /// Where the nodes sit in parameter space (default: the distinct knots for the paper's
+    /// derivation, the Greville abscissae for the others).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grid: Option<LatticeGrid>,
     /// Nodes along u for `grid = "uniform"` (≥ 2).
     pub nodes_u: usize,
     /// Nodes along v for `grid = "uniform"` (≥ 2; ignored for curves).
@@ -297,14 +300,30 @@ pub struct MsmSpec {
     pub damping: f64,
     /// Rest length = (1 − pre_strain) × initial length; in (−1, 1).
     pub pre_strain: f64,
-    /// Fixed nodes: `"auto"` (docs/math.md §5 rule) or a list `[[a, b], …]` (curves `[[a], …]`).
+    /// Fixed nodes: `"auto"` (docs/math.md §5 rule; on the Greville grid a node is fixed iff
+    /// its control point is) or a list `[[a, b], …]` (curves `[[a], …]`).
     pub fixed: MsmFixed,
+    /// The kinds of linear elements of the modal, excitation and reduction derivations
+    /// (default: every kind the lattice has; each split into interior and boundary classes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub elements: Option<Vec<LinearKind>>,
+}
+
+impl MsmSpec {
+    /// The grid a derivation uses: the scene's, else the distinct knots for the paper's and
+    /// the Greville abscissae for the others.
+    pub fn grid_for(&self, method: Method) -> LatticeGrid {
+        self.grid.unwrap_or(match method {
+            Method::Paper => LatticeGrid::Knots,
+            _ => LatticeGrid::Greville,
+        })
+    }
 }
 
 impl Default for MsmSpec {
     fn default() -> Self {
         Self {
-            grid: LatticeGrid::Knots,
+            grid: None,
             nodes_u: 5,
             nodes_v: 3,
             structural: true,
@@ -317,6 +336,7 @@ impl Default for MsmSpec {
             damping: 0.0,
             pre_strain: 0.0,
             fixed: MsmFixed::Auto,
+            elements: None,
         }
     }
 }
@@ -386,6 +406,8 @@ impl<'de> Deserialize<'de> for MsmFixed {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FitSpec {
+    /// Which derivation: `"modal"` (default), `"paper"`, `"excitation"` or `"reduction"`.
+    pub derivation: Method,
     /// Which dofs enter eq. (15).
     pub dofs: FitDofs,
     /// Constrain the spring constants to k ≥ 0.

@@ -3,10 +3,11 @@
 
 use std::path::Path;
 
+use nurbspring_derive::Method;
 use nurbspring_dnurbs::{DnurbsError, DnurbsOptions, Geometry, Material};
 use nurbspring_geom::{GeomError, KnotVector, NurbsCurve, NurbsSurface};
 use nurbspring_io::output::format_f64;
-use nurbspring_msm::{MsmError, MsmModel};
+use nurbspring_msm::{LinearKind, MsmError, MsmModel};
 use nurbspring_sim::{SimError, check_time};
 
 use crate::build;
@@ -133,7 +134,7 @@ pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneErro
         info.as_ref(),
         &mut p,
     );
-    check_msm(&raw.msm, &raw.loads, info.as_ref(), &mut p);
+    check_msm(&raw.msm, &raw.loads, &raw.fit, info.as_ref(), &mut p);
     if raw.output.vtk_every == 0 {
         p.push("output.vtk_every", "0", "must be at least 1");
     }
@@ -865,8 +866,36 @@ fn time_problem(p: &mut Problems, key: &str, value: f64, what: &str) {
     }
 }
 
-fn check_msm(m: &MsmSpec, loads: &LoadsSpec, info: Option<&GeomInfo>, p: &mut Problems) {
-    for e in build::lattice_options(m, loads.gravity).problems() {
+fn check_msm(
+    m: &MsmSpec,
+    loads: &LoadsSpec,
+    fit: &FitSpec,
+    info: Option<&GeomInfo>,
+    p: &mut Problems,
+) {
+    let curve = info.is_some_and(|g| !g.surface);
+    let method = fit.derivation;
+    if let Some(kinds) = &m.elements {
+        if kinds.is_empty() {
+            p.push(
+                "msm.elements",
+                "[]",
+                "list at least one kind of linear element",
+            );
+        }
+        if curve {
+            for k in kinds.iter().filter(|k| !LinearKind::CHAIN.contains(k)) {
+                p.push(
+                    "msm.elements",
+                    format!("\"{}\"", k.name()),
+                    "a curve's lattice has only spring_u and bend_u elements",
+                );
+            }
+        }
+    }
+    // The spring keys are checked whatever the derivation: they also describe the lattice
+    // `simulate --model msm` runs.
+    for e in build::lattice_options(m, loads.gravity, Method::Paper, curve).problems() {
         match e {
             MsmError::InvalidOption { name, value, rule } => {
                 let key = match name.strip_prefix("gravity") {
@@ -884,7 +913,8 @@ fn check_msm(m: &MsmSpec, loads: &LoadsSpec, info: Option<&GeomInfo>, p: &mut Pr
         }
     }
     let Some(g) = info else { return };
-    let (lu, lv) = match build::lattice_shape(&build::parameter_grid(m), &g.geometry) {
+    let grid = m.grid_for(method);
+    let (lu, lv) = match build::lattice_shape(&build::parameter_grid(m, method), &g.geometry) {
         Ok(shape) => shape,
         Err(MsmError::InvalidOption { name, value, rule }) => {
             if name != "nodes_v" || g.surface {
@@ -894,12 +924,12 @@ fn check_msm(m: &MsmSpec, loads: &LoadsSpec, info: Option<&GeomInfo>, p: &mut Pr
         }
         Err(MsmError::TooLarge { nodes }) => {
             p.push(
-                if m.grid == LatticeGrid::Uniform {
+                if grid == LatticeGrid::Uniform {
                     "msm.nodes_u"
                 } else {
                     "msm.grid"
                 },
-                if m.grid == LatticeGrid::Uniform && g.surface {
+                if grid == LatticeGrid::Uniform && g.surface {
                     format!("{} x {} nodes", m.nodes_u, m.nodes_v)
                 } else {
                     format!("{nodes} nodes")

@@ -195,7 +195,7 @@ fn exercise(text: &str) {
         }
         Err(e) => assert!(!e.to_string().is_empty()),
     }
-    if let Ok(config) = scene.derivation_config()
+    if let Ok(config) = scene.derivation_config(Some(nurbspring_derive::Method::Paper))
         && let Ok(setup) = nurbspring_derive::Setup::new(&config)
     {
         let _ = setup.solve(nurbspring_derive::FitDofs::All, false);

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use nurbspring_derive::{FitDofs, FitMethod};
+use nurbspring_derive::{FitDofs, FitMethod, Method};
 use nurbspring_dnurbs::{DnurbsOptions, Integration, Material, RestShape};
 use nurbspring_scene::*;
 use nurbspring_sim::IntegratorKind;
@@ -98,7 +98,7 @@ fn examples_copy_matches_and_all_examples_parse() {
     assert_eq!(
         std::fs::read_to_string(examples.join("paper.toml")).unwrap(),
         paper_text(),
-        "examples/paper.toml must equal crates/io/tests/data/paper.toml"
+        "examples/paper.toml must equal crates/scene/tests/data/paper.toml"
     );
     for entry in std::fs::read_dir(&examples).unwrap() {
         let p = entry.unwrap().path();
@@ -453,8 +453,8 @@ fn empty_arrays() {
 fn huge_sizes_are_refused() {
     let msg = fails(
         &edited(
-            "grid = \"knots\"",
-            "grid = \"uniform\"\nnodes_u = 100000\nnodes_v = 100001",
+            "fixed = \"auto\"",
+            "fixed = \"auto\"\ngrid = \"uniform\"\nnodes_u = 100000\nnodes_v = 100001",
         ),
         SceneErrorKind::Invalid,
     );
@@ -467,8 +467,8 @@ fn huge_sizes_are_refused() {
     );
     let msg = fails(
         &edited(
-            "grid = \"knots\"",
-            "grid = \"uniform\"\nnodes_u = 18446744073709551615\nnodes_v = 3",
+            "fixed = \"auto\"",
+            "fixed = \"auto\"\ngrid = \"uniform\"\nnodes_u = 18446744073709551615\nnodes_v = 3",
         ),
         SceneErrorKind::Invalid,
     );
@@ -552,7 +552,7 @@ fn values_out_of_range() {
         ),
         (
             "fixed = \"auto\"",
-            "fixed = [[0, 0], [5, 1]]",
+            "grid = \"knots\"\nfixed = [[0, 0], [5, 1]]",
             &["msm.fixed[1] = [5, 1]: outside the 5 x 3 lattice"],
         ),
         (
@@ -978,11 +978,13 @@ fn scene() -> impl Strategy<Value = Scene> {
                     probes,
                 },
                 msm: MsmSpec {
-                    grid: [
-                        LatticeGrid::Knots,
-                        LatticeGrid::Uniform,
-                        LatticeGrid::Greville,
-                    ][grid],
+                    grid: Some(
+                        [
+                            LatticeGrid::Knots,
+                            LatticeGrid::Uniform,
+                            LatticeGrid::Greville,
+                        ][grid],
+                    ),
                     nodes_u,
                     nodes_v,
                     structural: springs[0] || !(springs[1] || springs[2]),
@@ -999,8 +1001,14 @@ fn scene() -> impl Strategy<Value = Scene> {
                     } else {
                         MsmFixed::Nodes(vec![if surface { vec![0, 0] } else { vec![0] }])
                     },
+                    elements: None,
                 },
                 fit: FitSpec {
+                    derivation: if fit == 1 {
+                        Method::Paper
+                    } else {
+                        Method::Modal
+                    },
                     dofs: if nonneg { FitDofs::Free } else { FitDofs::All },
                     nonnegative: nonneg,
                     method: if fit == 1 {

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use nurbspring_derive::Method;
 use nurbspring_scene::report::{constants_text, write_derivation};
 use nurbspring_scene::{Error, Scene};
 
@@ -17,33 +18,63 @@ pub struct DeriveArgs {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
+    /// Derivation: modal (default), paper, excitation or reduction (default: the scene's
+    /// fit.derivation).
+    #[arg(long, value_parser = parse_method)]
+    derivation: Option<Method>,
+}
+
+fn parse_method(s: &str) -> Result<Method, String> {
+    Method::parse(s).ok_or_else(|| {
+        format!(
+            "unknown derivation; expected one of {}",
+            Method::ALL.map(Method::name).join(", ")
+        )
+    })
 }
 
 /// Derives the MSM of a scene and writes every output.
 pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
-    let config = scene.derivation_config()?;
+    let config = scene.derivation_config(args.derivation)?;
     let out = prepare_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
-    let (derivation, _) =
-        nurbspring_derive::derive_msm(&config, Some(ctx.cancel.clone()), &mut |d, t| {
-            bar.update(d, t)
-        })
-        .map_err(|e| Error::model(&scene.path, None, e))?;
+    let cancel = Some(ctx.cancel.clone());
+    let key = if args.derivation.is_some() {
+        "--derivation"
+    } else {
+        "fit.derivation"
+    };
+    let result = match config.method {
+        Method::Paper => {
+            nurbspring_derive::derive_msm(&config, cancel, &mut |d, t| bar.update(d, t))
+        }
+        _ => nurbspring_derive::derive_linear(&config, cancel),
+    };
+    let (derivation, _) = result.map_err(|e| {
+        let input = e.kind() == nurbspring_sim::ErrorKind::Input;
+        Error::model(&scene.path, input.then_some(key), e)
+    })?;
     bar.finish();
     let label = args.scene.display().to_string();
     write_derivation(&out, &label, &scene, &derivation, None, "")?;
     if ctx.verbose() {
         let d = &derivation.derived;
         println!(
-            "derived MSM: {}, m = {:.6}; dt_critical = {:.5}; central node rel. RMS = {:.4} ({})",
+            "derived MSM ({}): {}, m = {:.6}; dt_critical = {:.5}; central node rel. RMS = {:.4} over {:.3} s ({}), second excitation {:.4}",
+            derivation.method.name(),
             constants_text(&d.constants, 6),
             d.m,
             d.dt_critical,
             d.validation.relative_rms,
-            d.validation.integrator
+            d.validation.horizon,
+            d.validation.integrator,
+            derivation.second_excitation.relative_rms
         );
         println!("Outputs in {}", out.display());
+    }
+    for w in &derivation.warnings {
+        eprintln!("warning: {w}");
     }
     Ok(())
 }

@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use nurbspring_scene::Scene;
-use nurbspring_scene::report::{verdict_table, write_derivation};
+use nurbspring_scene::markdown::verdict_table;
+use nurbspring_scene::report::write_derivation;
 
 use crate::progress::Progress;
 use crate::{CmdResult, Context, prepare_out_dir};
@@ -20,7 +21,7 @@ pub struct PaperArgs {
 /// Runs the paper's experiment and prints the reproduction table.
 pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
     let scene = Scene::paper()?;
-    let config = scene.derivation_config()?;
+    let config = scene.derivation_config(Some(nurbspring_derive::Method::Paper))?;
     let out = prepare_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
     let (derivation, report) =

@@ -40,7 +40,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     t_end: Option<f64>,
     /// Integrator: terzopoulos-qin, newmark, modal (D-NURBS); symplectic-euler, verlet, rk4,
-    /// backward-euler, newmark (MSM). Default: the scene's.
+    /// backward-euler, newmark, modal (MSM; modal: linear MSMs). Default: the scene's.
     #[arg(long, value_parser = parse_integrator)]
     integrator: Option<IntegratorKind>,
     /// Run an explicit integrator above its stability limit anyway.

@@ -90,7 +90,7 @@ pub fn curved_lattice(n_u: usize, n_v: usize, pre_strain: f64) -> SpringLattice 
             nodes_u: n_u,
             nodes_v: n_v,
         },
-        springs: Constants::from_pairs([
+        constants: Constants::from_pairs([
             (Class::Spring(SpringKind::Structural), 3.0),
             (Class::Spring(SpringKind::Shear), 1.5),
             (Class::Spring(SpringKind::Bend), 0.7),

@@ -1,0 +1,408 @@
+//! The judgement every derivation shares (docs/math.md §8.5–8.6): the horizon, the D-NURBS
+//! reference, the 3-D validation of the probes, the second excitation, the frequency table,
+//! the masses against the D-NURBS's, and the warnings.
+
+use nurbspring_dnurbs::{DnurbsModel, Geometry};
+use nurbspring_linalg::SparseMatrix;
+use nurbspring_sim::State;
+
+use crate::modal_solution::ModalBasis;
+use crate::outcome::{FrequencyRow, MassReport, ProbeError, Validation};
+use crate::reference::{ReferenceKind, Watch, run_scalar, scalar_rows};
+use crate::scalar::ScalarSystem;
+use crate::setup::{Method, Setup};
+use crate::validation::{compare, compare_points, mac};
+use crate::{DeriveError, Trajectory};
+
+/// The validation horizon covers at least this many periods of the lowest mode.
+pub const PERIODS: f64 = 5.0;
+/// A relative RMS of the central node above this is a bad model.
+pub const WARN_RELATIVE_RMS: f64 = 0.10;
+/// A lowest frequency off by more than this (relative) is a bad model.
+pub const WARN_FREQUENCY: f64 = 0.01;
+/// A free mass off by more than this factor is a bad model.
+pub const WARN_MASS_FACTOR: f64 = 2.0;
+/// Distinct frequencies listed in the frequency table.
+pub const TABLE_MODES: usize = 8;
+
+/// `max(t_end, PERIODS · 2π/ω₁)`.
+pub fn horizon(t_end: f64, omega1: f64) -> f64 {
+    if omega1 > 0.0 {
+        t_end.max(PERIODS * 2.0 * std::f64::consts::PI / omega1)
+    } else {
+        t_end
+    }
+}
+
+/// The scalar system of the D-NURBS (free control points) and all its modes.
+pub struct DnurbsModes {
+    /// The system.
+    pub system: ScalarSystem,
+    /// Its modes.
+    pub basis: ModalBasis,
+}
+
+impl DnurbsModes {
+    /// The scalar system and modes of the setup's D-NURBS from its initial state.
+    pub fn new(setup: &Setup, what: &'static str) -> Result<Self, DeriveError> {
+        let system = ScalarSystem::of_dnurbs(setup.model(), setup.dnurbs_initial(), what)?;
+        let basis = ModalBasis::new(&system.stiffness, &system.mass)?;
+        Ok(Self { system, basis })
+    }
+
+    /// The lowest non-zero angular frequency.
+    pub fn omega1(&self) -> f64 {
+        self.basis
+            .omega
+            .iter()
+            .copied()
+            .find(|&w| w > 0.0)
+            .unwrap_or(0.0)
+    }
+}
+
+/// The probes as points of the D-NURBS scalar system: rest position `Ω_probe p(0)` and the
+/// probe rows of Ω on the free control points.
+pub fn dnurbs_watch(setup: &Setup, system: &ScalarSystem) -> Vec<Watch> {
+    let omega = setup.probe_omega();
+    let base = omega.apply(setup.model().p0());
+    let scalar = scalar_rows(omega.matrix());
+    let mut position = vec![usize::MAX; setup.model().geometry().n_control_points()];
+    for (i, &k) in system.free.iter().enumerate() {
+        position[k] = i;
+    }
+    (0..scalar.nrows())
+        .map(|p| Watch {
+            base: base[p],
+            weights: row(&scalar, p)
+                .into_iter()
+                .filter(|&(k, _)| position[k] != usize::MAX)
+                .map(|(k, w)| (position[k], w))
+                .collect(),
+        })
+        .collect()
+}
+
+/// The non-zeros of row `r` of a CSC matrix, `(column, value)`.
+pub(crate) fn row(a: &SparseMatrix, r: usize) -> Vec<(usize, f64)> {
+    let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.values());
+    (0..a.ncols())
+        .filter_map(|j| {
+            (cp[j]..cp[j + 1])
+                .find(|&k| ri[k] == r)
+                .map(|k| (j, v[k]))
+                .filter(|&(_, x)| x != 0.0)
+        })
+        .collect()
+}
+
+/// The probes as points of a node-space system on the free nodes `free` of the lattice
+/// nodes at `positions` (a fixed probe node does not move).
+pub fn node_watch(probe_nodes: &[usize], free: &[usize], positions: &[[f64; 3]]) -> Vec<Watch> {
+    probe_nodes
+        .iter()
+        .map(|&a| Watch {
+            base: positions[a],
+            weights: free
+                .binary_search(&a)
+                .map(|i| vec![(i, 1.0)])
+                .unwrap_or_default(),
+        })
+        .collect()
+}
+
+/// Compares the probes of `msm` with those of `reference` in 3-D (the central probe first).
+pub fn validation(
+    setup: &Setup,
+    reference: &Trajectory,
+    kind: ReferenceKind,
+    msm: &Trajectory,
+    integrator: String,
+    horizon: f64,
+    dt: f64,
+) -> Validation {
+    let t = &reference.t;
+    let probes: Vec<ProbeError> = setup
+        .probes()
+        .iter()
+        .zip(setup.probe_nodes())
+        .enumerate()
+        .map(|(p, (&(u, v), &node))| {
+            let c = compare_points(t, &reference.probes[p], &msm.probes[p]);
+            ProbeError {
+                u,
+                v,
+                node,
+                relative_rms: c.relative_rms,
+                rms: c.rms,
+            }
+        })
+        .collect();
+    let stopped = msm.stopped.is_some();
+    let central = compare_points(t, &reference.probes[0], &msm.probes[0]);
+    let z = compare(t, &reference.component(0, 2), &msm.component(0, 2));
+    let complete = !stopped && central.samples == t.len();
+    let or_inf = |x: f64| if complete { x } else { f64::INFINITY };
+    Validation {
+        integrator,
+        reference: kind,
+        horizon,
+        dt,
+        rms: or_inf(central.rms),
+        max_abs: or_inf(central.max_abs),
+        relative_rms: or_inf(central.relative_rms),
+        relative_rms_z: or_inf(z.relative_rms),
+        dnurbs_amplitude: central.reference_amplitude,
+        dnurbs_period: central.reference_period,
+        msm_period: if complete { central.other_period } else { None },
+        samples: central.samples,
+        msm_stopped: msm.stopped.clone(),
+        probes,
+    }
+}
+
+/// The D-NURBS state of the second excitation: at rest, one off-centre free control point
+/// (the one whose Greville point is nearest a third of the way into the domain) pushed along
+/// the surface normal (a curve: across it) with the speed of the scene's initial velocity
+/// (1 when it has none).
+pub fn impulse(setup: &Setup, speed: f64) -> Result<State, DeriveError> {
+    let model: &DnurbsModel = setup.model();
+    let fixed = model.fixed_points();
+    let speed = if speed > 0.0 { speed } else { 1.0 };
+    let (target, points): ((f64, f64), Vec<(usize, (f64, f64))>) = match model.geometry() {
+        Geometry::Surface(s) => {
+            let (gu, gv) = (
+                s.basis_u().knots().greville(),
+                s.basis_v().knots().greville(),
+            );
+            let ((u0, u1), (v0, v1)) = s.domain();
+            let pts = (0..s.n_u())
+                .flat_map(|i| (0..s.n_v()).map(move |j| (i, j)))
+                .map(|(i, j)| (s.index(i, j), (gu[i], gv[j])))
+                .collect();
+            ((u0 + 0.3 * (u1 - u0), v0 + 0.35 * (v1 - v0)), pts)
+        }
+        Geometry::Curve(c) => {
+            let g = c.basis().knots().greville();
+            let (u0, u1) = c.domain();
+            (
+                (u0 + 0.3 * (u1 - u0), 0.0),
+                g.iter().enumerate().map(|(k, &u)| (k, (u, 0.0))).collect(),
+            )
+        }
+    };
+    let (k, (u, v)) = points
+        .into_iter()
+        .filter(|(k, _)| !fixed.contains(k))
+        .min_by(|a, b| {
+            let d = |p: (f64, f64)| (p.0 - target.0).powi(2) + (p.1 - target.1).powi(2);
+            d(a.1).total_cmp(&d(b.1))
+        })
+        .ok_or_else(|| DeriveError::InvalidOption {
+            name: "constraints",
+            value: "every control point fixed".into(),
+            reason: "the second excitation needs a free control point".into(),
+        })?;
+    let direction = match model.geometry() {
+        Geometry::Surface(s) => {
+            let d = s.derivatives(u, v, 1)?;
+            normalize(cross(d.u, d.v)).unwrap_or([0.0, 0.0, 1.0])
+        }
+        Geometry::Curve(c) => {
+            let t = normalize(c.derivatives(u, 1)?.u).unwrap_or([1.0, 0.0, 0.0]);
+            let axis = if t[2].abs() < 0.9 {
+                [0.0, 0.0, 1.0]
+            } else {
+                [0.0, 1.0, 0.0]
+            };
+            let along = axis[0] * t[0] + axis[1] * t[1] + axis[2] * t[2];
+            normalize([
+                axis[0] - along * t[0],
+                axis[1] - along * t[1],
+                axis[2] - along * t[2],
+            ])
+            .unwrap_or([0.0, 0.0, 1.0])
+        }
+    };
+    let mut velocities = vec![[0.0; 3]; model.geometry().n_control_points()];
+    velocities[k] = direction.map(|x| speed * x);
+    Ok(model.initial_state(&velocities, 0.0))
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
+    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    (n > 0.0).then(|| a.map(|x| x / n))
+}
+
+/// The largest speed among the control points of the scene's initial state.
+pub fn initial_speed(state: &State) -> f64 {
+    state
+        .v
+        .chunks(3)
+        .map(|c| c.iter().map(|x| x * x).sum::<f64>().sqrt())
+        .fold(0.0, f64::max)
+}
+
+/// The scalar system with a different initial state and no load (the second excitation).
+pub fn unloaded(
+    system: &ScalarSystem,
+    displacement: Vec<[f64; 3]>,
+    velocity: Vec<[f64; 3]>,
+) -> ScalarSystem {
+    ScalarSystem {
+        load: vec![[0.0; 3]; system.n()],
+        displacement,
+        velocity,
+        ..system.clone()
+    }
+}
+
+/// The D-NURBS under the second excitation, watched at the probes.
+pub fn dnurbs_impulse_run(
+    setup: &Setup,
+    modes: &DnurbsModes,
+    impulse: &State,
+    times: &[f64],
+    dt: f64,
+) -> Result<(Trajectory, ReferenceKind), DeriveError> {
+    let sys = unloaded(
+        &modes.system,
+        vec![[0.0; 3]; modes.system.n()],
+        crate::scalar::points(&impulse.v),
+    );
+    run_scalar(&sys, &modes.basis, &dnurbs_watch(setup, &sys), times, dt)
+}
+
+/// The lowest distinct frequencies of both models with the MAC of their shapes at the free
+/// nodes (`omega_ff`: scalar Ω of the free nodes on the free control points; `msm` a basis
+/// over the free nodes).
+pub fn frequency_table(
+    dn: &ModalBasis,
+    omega_ff: &SparseMatrix,
+    msm: &ModalBasis,
+) -> Vec<FrequencyRow> {
+    let count = TABLE_MODES.min(dn.len()).min(msm.len());
+    (0..count)
+        .map(|i| {
+            let phi = dn.mode(i);
+            let mut at_nodes = vec![0.0; omega_ff.nrows()];
+            omega_ff.mul_vec(&phi, &mut at_nodes);
+            let (a, b) = (dn.omega[i], msm.omega[i]);
+            FrequencyRow {
+                mode: i + 1,
+                dnurbs: a,
+                msm: b,
+                relative_difference: if a > 0.0 { b / a - 1.0 } else { f64::NAN },
+                mac: Some(mac(&at_nodes, &msm.mode(i))),
+            }
+        })
+        .collect()
+}
+
+/// Each value three times (x, y, z), ascending.
+pub fn triplicate(omega: &[f64]) -> Vec<f64> {
+    omega.iter().flat_map(|&w| [w; 3]).collect()
+}
+
+/// The totals of a [`MassReport`]: the model's masses (every node, free nodes) against the
+/// D-NURBS's (`Σ_ij M_ij / 3`, the free rows' share).
+pub fn with_totals(
+    mut report: MassReport,
+    model: &DnurbsModel,
+    masses: &[f64],
+    fixed: &[bool],
+) -> MassReport {
+    let m = &model.matrices().mass;
+    let dpp = model.matrices().dofs_per_point;
+    let fixed_cp = model.fixed_points();
+    let (mut total, mut free) = (0.0, 0.0);
+    for (i, j, v) in m.triplets() {
+        if dpp == 4 && (i % 4 == 3 || j % 4 == 3) {
+            continue;
+        }
+        total += v;
+        if !fixed_cp.contains(&(i / dpp)) {
+            free += v;
+        }
+    }
+    report.total_dnurbs = total / 3.0;
+    report.free_dnurbs = free / 3.0;
+    report.total_msm = masses.iter().sum();
+    report.free_msm = masses
+        .iter()
+        .zip(fixed)
+        .filter(|(_, f)| !**f)
+        .map(|(m, _)| m)
+        .sum();
+    report
+}
+
+/// Every sign of a bad model: the central node's relative RMS, the lowest frequency, the free
+/// mass; for the paper's derivation a class clamped to zero or a mass at the edge of its scan.
+pub fn warnings(
+    method: Method,
+    validation: &Validation,
+    second: &Validation,
+    frequencies: &[crate::outcome::FrequencyRow],
+    mass: &MassReport,
+    clamped: &[String],
+) -> Vec<String> {
+    let mut out = Vec::new();
+    let pct = |x: f64| 100.0 * x;
+    // NaN (no motion to compare) counts as a bad sign too.
+    let above = |x: f64, limit: f64| x.is_nan() || x > limit;
+    if above(validation.relative_rms, WARN_RELATIVE_RMS) {
+        out.push(format!(
+            "the central node's relative RMS against the D-NURBS is {:.1}% over {:.3} s (above {:.0}%)",
+            pct(validation.relative_rms),
+            validation.horizon,
+            pct(WARN_RELATIVE_RMS)
+        ));
+    }
+    if let Some(first) = frequencies.first()
+        && above(first.relative_difference.abs(), WARN_FREQUENCY)
+    {
+        out.push(format!(
+            "the lowest frequency is off by {:+.2}% ({:.6} rad/s against the D-NURBS's {:.6})",
+            pct(first.relative_difference),
+            first.msm,
+            first.dnurbs
+        ));
+    }
+    let ratio = mass.free_msm / mass.free_dnurbs;
+    if !(1.0 / WARN_MASS_FACTOR..=WARN_MASS_FACTOR).contains(&ratio) {
+        out.push(format!(
+            "the free nodes carry {:.4} of mass against the D-NURBS's {:.4} ({ratio:.3}×)",
+            mass.free_msm, mass.free_dnurbs
+        ));
+    }
+    if above(second.relative_rms, 2.0 * WARN_RELATIVE_RMS) {
+        out.push(format!(
+            "under the second excitation the central node's relative RMS is {:.1}%",
+            pct(second.relative_rms)
+        ));
+    }
+    if method == Method::Paper {
+        for c in clamped {
+            out.push(format!("{c} was clamped to 0 by k >= 0"));
+        }
+        if let (Some(first), Some(last)) = (mass.candidates.first(), mass.candidates.last())
+            && mass.candidates.len() > 1
+            && (mass.selected == first.m || mass.selected == last.m)
+        {
+            out.push(format!(
+                "the selected mass {} is at the edge of the scan [{}, {}]",
+                mass.selected, first.m, last.m
+            ));
+        }
+    }
+    out
+}

@@ -1,0 +1,317 @@
+//! The `excitation` derivation (docs/math.md §8.4): the modal fit refined on the D-NURBS modes
+//! that the scene's own initial velocity and loads excite. The masses are the reference
+//! masses times one scale; the unknowns are `log k_c` (of the classes the modal fit kept
+//! non-zero) and the log mass scale; the residuals, over the `q` most excited modes, are the
+//! log ratio of each mode's frequency to that of the MSM mode of best MAC and the difference
+//! of their normalized shapes at the nodes, weighted by the square root of the mode's share of
+//! the motion. Levenberg–Marquardt from the modal fit, then the calibration of the lowest
+//! frequency. It can over-fit: constants far from the modal fit's, or a much smaller explicit
+//! step, are reported as warnings.
+
+use nurbspring_linalg::{
+    DenseMatrix, SparseMatrix, cholesky_solve_dense, generalized_eigen_sparse_lowest,
+};
+use nurbspring_msm::{Class, Constants};
+use serde::Serialize;
+
+use crate::DeriveError;
+use crate::evaluation::DnurbsModes;
+use crate::linear::NodeMap;
+use crate::modal::{ModalSolution, combine, lowest_frequency};
+use crate::validation::mac;
+
+/// Modes weighted.
+pub const EXCITED_MODES: usize = 8;
+/// Constants beyond this factor of the modal fit's (either way) are suspicious.
+pub const CONSTANT_RANGE: f64 = 1e3;
+/// An explicit step limit this many times smaller than the modal fit's is suspicious.
+pub const STEP_SHRINK: f64 = 10.0;
+/// Levenberg–Marquardt iterations.
+const ITERATIONS: usize = 40;
+
+/// What the excitation-aware fit reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct ExcitationReport {
+    /// The classes refined.
+    pub classes: Vec<Class>,
+    /// Their constants.
+    pub constants: Constants,
+    /// The modal fit it started from.
+    pub modal_constants: Constants,
+    /// The D-NURBS modes weighted (1 = lowest) and their shares of the motion.
+    pub modes: Vec<(usize, f64)>,
+    /// Weighted residual norm at the start and at the end.
+    pub residual: (f64, f64),
+    /// Levenberg–Marquardt iterations taken.
+    pub iterations: usize,
+    /// The calibration factor of the masses.
+    pub mass_scale: f64,
+    /// Explicit step limit `2/ω_max` of the modal fit and of this one.
+    pub dt_critical: (f64, f64),
+}
+
+/// The refined model.
+pub struct ExcitationSolution {
+    /// Constants by class.
+    pub constants: Constants,
+    /// Calibrated masses of the free nodes.
+    pub masses: Vec<f64>,
+    /// The report.
+    pub report: ExcitationReport,
+    /// Signs of over-fitting.
+    pub warnings: Vec<String>,
+}
+
+/// The modes of `L x = ω² diag(m) x`, lowest `count`.
+fn msm_modes(
+    l: &SparseMatrix,
+    masses: &[f64],
+    count: usize,
+) -> Result<(Vec<f64>, DenseMatrix), DeriveError> {
+    let m = SparseMatrix::from_diagonal(masses);
+    let tl: f64 = l.diagonal().iter().sum();
+    let shift = -1e-6 * tl / masses.iter().sum::<f64>();
+    let e = generalized_eigen_sparse_lowest(l, &m, count, shift)?;
+    Ok((
+        e.values.iter().map(|v| v.max(0.0).sqrt()).collect(),
+        e.vectors,
+    ))
+}
+
+/// The largest angular frequency of `L x = ω² diag(m) x` (power iteration on `diag(m)⁻¹ L`).
+fn highest_frequency(l: &SparseMatrix, masses: &[f64]) -> f64 {
+    let n = masses.len();
+    let mut x: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 * 0.1).collect();
+    let mut lambda = 0.0;
+    let mut y = vec![0.0; n];
+    for _ in 0..200 {
+        l.mul_vec(&x, &mut y);
+        for (v, m) in y.iter_mut().zip(masses) {
+            *v /= m;
+        }
+        let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm == 0.0 {
+            return 0.0;
+        }
+        lambda = norm / x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        x.iter_mut().zip(&y).for_each(|(a, b)| *a = b / norm);
+    }
+    lambda.sqrt()
+}
+
+/// The excitation-aware refinement of `modal`.
+pub fn excitation_fit(
+    modes: &DnurbsModes,
+    map: &NodeMap,
+    classes: &[Class],
+    units: &[SparseMatrix],
+    modal: &ModalSolution,
+    reference: &[f64],
+) -> Result<ExcitationSolution, DeriveError> {
+    let sys = &modes.system;
+    let basis = &modes.basis;
+    // Each mode's oscillation amplitude from the initial state and the load.
+    let mass_dot = |v: &[[f64; 3]], i: usize| -> [f64; 3] {
+        let phi = basis.mode(i);
+        let mut mv = vec![[0.0; 3]; v.len()];
+        for x in 0..3 {
+            let col: Vec<f64> = v.iter().map(|p| p[x]).collect();
+            let mut y = vec![0.0; col.len()];
+            sys.mass.mul_vec(&col, &mut y);
+            for (a, val) in y.into_iter().enumerate() {
+                mv[a][x] = val;
+            }
+        }
+        [0, 1, 2].map(|x| phi.iter().zip(&mv).map(|(p, m)| p * m[x]).sum())
+    };
+    let mut amplitude: Vec<(usize, f64)> = Vec::new();
+    for i in 0..basis.len() {
+        let (w, l) = (basis.omega[i], basis.lambda[i]);
+        if w <= 0.0 {
+            continue;
+        }
+        let (e0, e1) = (mass_dot(&sys.displacement, i), mass_dot(&sys.velocity, i));
+        let phi = basis.mode(i);
+        let g: [f64; 3] = [0, 1, 2].map(|x| phi.iter().zip(&sys.load).map(|(p, f)| p * f[x]).sum());
+        let a2: f64 = (0..3)
+            .map(|x| (e0[x] - g[x] / l).powi(2) + (e1[x] / w).powi(2))
+            .sum();
+        amplitude.push((i, a2));
+    }
+    let total: f64 = amplitude.iter().map(|a| a.1).sum();
+    if total.is_nan() || total <= 0.0 {
+        return Err(DeriveError::InvalidOption {
+            name: "initial.velocity",
+            value: "no excitation".into(),
+            reason: "the excitation derivation weights the modes the scene's initial velocity and loads excite, and this scene excites none (give initial.velocity, initial.displacement or loads)".into(),
+        });
+    }
+    amplitude.sort_by(|a, b| b.1.total_cmp(&a.1));
+    amplitude.truncate(EXCITED_MODES);
+    let targets: Vec<(f64, Vec<f64>, f64)> = amplitude
+        .iter()
+        .map(|&(i, a2)| (basis.omega[i], map.at_nodes(&basis.mode(i)), a2 / total))
+        .collect();
+    let active: Vec<usize> = (0..classes.len())
+        .filter(|&c| modal.constants.value(classes[c]) > 0.0 && units[c].frobenius_norm() > 0.0)
+        .collect();
+    let active_units: Vec<&SparseMatrix> = active.iter().map(|&c| &units[c]).collect();
+    let n = reference.len();
+    let count = (2 * EXCITED_MODES).min(n);
+    // θ = (log k_c, log s); masses s · m̄.
+    let residual = |theta: &[f64]| -> Result<Vec<f64>, DeriveError> {
+        let k: Vec<f64> = theta[..active.len()].iter().map(|t| t.exp()).collect();
+        let s = theta[active.len()].exp();
+        let l = combine(&active_units, &k, n)?;
+        let masses: Vec<f64> = reference.iter().map(|m| s * m).collect();
+        let (omega, vectors) = msm_modes(&l, &masses, count)?;
+        let mut r = Vec::new();
+        for (w, shape, share) in &targets {
+            let (best, _) = (0..omega.len())
+                .map(|j| (j, mac(shape, &vectors.column(j))))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((0, 0.0));
+            let weight = share.sqrt();
+            r.push(weight * (omega[best].max(f64::MIN_POSITIVE) / w).ln());
+            let psi = vectors.column(best);
+            let (na, nb) = (norm(shape), norm(&psi));
+            let sign = if dot(shape, &psi) < 0.0 { -1.0 } else { 1.0 };
+            for (a, b) in shape.iter().zip(&psi) {
+                r.push(weight * (a / na - sign * b / nb));
+            }
+        }
+        Ok(r)
+    };
+    let mut theta: Vec<f64> = active
+        .iter()
+        .map(|&c| modal.constants.value(classes[c]).ln())
+        .collect();
+    // The modal masses are m̄-like: start from their mean ratio to m̄.
+    let s0 = modal
+        .masses
+        .iter()
+        .zip(reference)
+        .map(|(m, r)| m / r)
+        .sum::<f64>()
+        / n as f64;
+    theta.push(s0.ln());
+    let mut r = residual(&theta)?;
+    let start = norm(&r);
+    let mut damping = 1e-3;
+    let mut iterations = 0;
+    let p = theta.len();
+    for _ in 0..ITERATIONS {
+        iterations += 1;
+        // Forward-difference Jacobian.
+        let h = 1e-6;
+        let mut jac = DenseMatrix::zeros(r.len(), p);
+        for j in 0..p {
+            let mut t = theta.clone();
+            t[j] += h;
+            let rj = residual(&t)?;
+            for i in 0..r.len() {
+                jac[(i, j)] = (rj[i] - r[i]) / h;
+            }
+        }
+        let jtj = jac.transpose().matmul(&jac);
+        let jtr: Vec<f64> = (0..p)
+            .map(|j| (0..r.len()).map(|i| jac[(i, j)] * r[i]).sum())
+            .collect();
+        let mut improved = false;
+        for _ in 0..8 {
+            let a = DenseMatrix::from_fn(p, p, |i, j| {
+                jtj[(i, j)]
+                    + if i == j {
+                        damping * (jtj[(i, i)] + 1e-12)
+                    } else {
+                        0.0
+                    }
+            });
+            let rhs: Vec<f64> = jtr.iter().map(|v| -v).collect();
+            let Ok(step) = cholesky_solve_dense(&a, &rhs) else {
+                damping *= 10.0;
+                continue;
+            };
+            let trial: Vec<f64> = theta
+                .iter()
+                .zip(&step)
+                .map(|(t, s)| t + s.clamp(-2.0, 2.0))
+                .collect();
+            let rt = residual(&trial)?;
+            if norm(&rt) < norm(&r) {
+                theta = trial;
+                r = rt;
+                damping = (damping / 3.0).max(1e-9);
+                improved = true;
+                break;
+            }
+            damping *= 10.0;
+        }
+        if !improved || norm(&jtr) <= 1e-10 * start.max(1e-300) {
+            break;
+        }
+    }
+    let k: Vec<f64> = theta[..active.len()].iter().map(|t| t.exp()).collect();
+    let s = theta[active.len()].exp();
+    let l = combine(&active_units, &k, n)?;
+    let mut masses: Vec<f64> = reference.iter().map(|m| s * m).collect();
+    let omega1 = lowest_frequency(&l, &masses)?;
+    let omega1_dnurbs = modal.report.omega1_dnurbs;
+    let mass_scale = (omega1 / omega1_dnurbs).powi(2);
+    masses.iter_mut().for_each(|m| *m *= mass_scale);
+    let mut constants = Constants::new();
+    for &c in classes {
+        constants.set(c, 0.0);
+    }
+    for (&c, &kc) in active.iter().zip(&k) {
+        constants.set(classes[c], kc);
+    }
+    let l_modal = combine(
+        &units.iter().collect::<Vec<_>>(),
+        &modal.constants.values_of(classes),
+        n,
+    )?;
+    let dt_modal = 2.0 / highest_frequency(&l_modal, &modal.masses);
+    let dt_here = 2.0 / highest_frequency(&l, &masses);
+    let mut warnings = Vec::new();
+    for (&c, &kc) in active.iter().zip(&k) {
+        let k0 = modal.constants.value(classes[c]);
+        if kc > CONSTANT_RANGE * k0 || kc < k0 / CONSTANT_RANGE {
+            warnings.push(format!(
+                "the excitation fit moved {} to {kc:.4e}, more than {CONSTANT_RANGE:e}× from the modal fit's {k0:.4e}",
+                classes[c].symbol()
+            ));
+        }
+    }
+    if dt_here < dt_modal / STEP_SHRINK {
+        warnings.push(format!(
+            "the excitation fit's explicit step limit {dt_here:.4e} s is more than {STEP_SHRINK}× smaller than the modal fit's {dt_modal:.4e} s"
+        ));
+    }
+    Ok(ExcitationSolution {
+        report: ExcitationReport {
+            classes: active.iter().map(|&c| classes[c]).collect(),
+            constants: constants.clone(),
+            modal_constants: modal.constants.clone(),
+            modes: amplitude
+                .iter()
+                .map(|&(i, a2)| (i + 1, a2 / total))
+                .collect(),
+            residual: (start, norm(&r)),
+            iterations,
+            mass_scale,
+            dt_critical: (dt_modal, dt_here),
+        },
+        constants,
+        masses,
+        warnings,
+    })
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}

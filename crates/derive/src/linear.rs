@@ -1,0 +1,592 @@
+//! The linear derivations (docs/math.md §8): `modal` (the default), `excitation` and
+//! `reduction`. Each yields a node-space linear model on the lattice's free nodes, judged by
+//! its exact modes against the exact D-NURBS motion.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use nurbspring_dnurbs::Integration;
+use nurbspring_linalg::{DenseMatrix, LuSolver, SparseMatrix, SpdSolver, symmetric_eigen};
+use nurbspring_msm::{Class, Constants, SpringLattice};
+
+use crate::DeriveError;
+use crate::evaluation::{
+    DnurbsModes, frequency_table, impulse, initial_speed, node_watch, triplicate, unloaded,
+    validation, warnings, with_totals,
+};
+use crate::excitation::excitation_fit;
+use crate::modal::{MODES, SampledMode, modal_fit};
+use crate::modal_solution::ModalBasis;
+use crate::outcome::{
+    Derivation, FitDetail, MassReport, NodeReduction, ParameterSet, ReductionReport, Spectrum,
+};
+use crate::pipeline::Judge;
+use crate::reference::{run_scalar, scalar_rows};
+use crate::scalar::ScalarSystem;
+use crate::setup::{Config, Method, Setup};
+
+/// A load below this fraction of the largest is no load (round-off).
+const NO_LOAD: f64 = 1e-12;
+
+/// The lattice's free nodes and the scalar Ω between them and the free control points.
+pub(crate) struct NodeMap {
+    /// Free nodes, ascending.
+    pub free: Vec<usize>,
+    /// Scalar Ω, free nodes × free control points.
+    pub omega_ff: SparseMatrix,
+}
+
+impl NodeMap {
+    fn new(setup: &Setup, modes: &DnurbsModes) -> Result<Self, DeriveError> {
+        let lattice = setup.lattice();
+        let free: Vec<usize> = (0..lattice.n_nodes())
+            .filter(|&a| !lattice.fixed[a])
+            .collect();
+        if free.is_empty() {
+            return Err(DeriveError::InvalidOption {
+                name: "msm.grid",
+                value: format!("{} nodes, all fixed", lattice.n_nodes()),
+                reason: "the derivation needs free lattice nodes".into(),
+            });
+        }
+        let omega_ff = scalar_rows(setup.omega().matrix()).submatrix(&free, &modes.system.free);
+        Ok(Self { free, omega_ff })
+    }
+
+    /// `Ω_ff x`.
+    pub fn at_nodes(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.omega_ff.nrows()];
+        self.omega_ff.mul_vec(x, &mut y);
+        y
+    }
+
+    /// True when Ω_ff is square (a Greville lattice: one free node per free control point).
+    pub fn is_square(&self) -> bool {
+        self.omega_ff.nrows() == self.omega_ff.ncols()
+    }
+}
+
+/// The mass of each node's dual cell in parameter space, `μ τ_u τ_v` (times `|c_u × c_v|`
+/// under area integration; a chain: `μ τ_u`).
+fn dual_cell_masses(setup: &Setup, config: &Config) -> Result<Vec<f64>, DeriveError> {
+    let lattice = setup.lattice();
+    let (n_u, n_v) = lattice.grid.unwrap_or((lattice.n_nodes(), 1));
+    let params = lattice
+        .params
+        .as_ref()
+        .ok_or(DeriveError::LatticeWithoutParameters)?;
+    let dual = |t: &[f64]| -> Vec<f64> {
+        let n = t.len();
+        (0..n)
+            .map(|a| {
+                let left = if a > 0 { t[a] - t[a - 1] } else { 0.0 };
+                let right = if a + 1 < n { t[a + 1] - t[a] } else { 0.0 };
+                if n == 1 { 1.0 } else { 0.5 * (left + right) }
+            })
+            .collect()
+    };
+    let us: Vec<f64> = (0..n_u).map(|i| params[i * n_v].0).collect();
+    let vs: Vec<f64> = (0..n_v).map(|j| params[j].1).collect();
+    let (tu, tv) = (dual(&us), dual(&vs));
+    let area = config.dnurbs.integration == Integration::Area;
+    let mut out = Vec::with_capacity(lattice.n_nodes());
+    for i in 0..n_u {
+        for j in 0..n_v {
+            let (u, v) = params[i * n_v + j];
+            let jac = if area {
+                match setup.model().geometry() {
+                    nurbspring_dnurbs::Geometry::Surface(s) => {
+                        let d = s.derivatives(u, v, 1)?;
+                        let c = [
+                            d.u[1] * d.v[2] - d.u[2] * d.v[1],
+                            d.u[2] * d.v[0] - d.u[0] * d.v[2],
+                            d.u[0] * d.v[1] - d.u[1] * d.v[0],
+                        ];
+                        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+                    }
+                    nurbspring_dnurbs::Geometry::Curve(c) => {
+                        let d = c.derivatives(u, 1)?.u;
+                        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+                    }
+                }
+            } else {
+                1.0
+            };
+            out.push(config.material.mu * tu[i] * tv[j] * jac);
+        }
+    }
+    Ok(out)
+}
+
+/// Reference masses of the free nodes: the row sums of `M_T = Ω_ff⁻ᵀ S_M Ω_ff⁻¹` when Ω_ff is
+/// square and invertible, the dual-cell masses elsewhere (and where a row sum is not
+/// positive). Also `Ω_ff⁻ᵀ` applied to loads, when it exists.
+struct Pullback {
+    reference: Vec<f64>,
+    transposed: Option<LuSolver>,
+}
+
+impl Pullback {
+    fn new(map: &NodeMap, modes: &DnurbsModes, dual: &[f64]) -> Self {
+        let fallback: Vec<f64> = map.free.iter().map(|&a| dual[a]).collect();
+        if !map.is_square() {
+            return Self {
+                reference: fallback,
+                transposed: None,
+            };
+        }
+        let (Ok(lu), Ok(lu_t)) = (
+            LuSolver::new(&map.omega_ff),
+            LuSolver::new(&map.omega_ff.transpose()),
+        ) else {
+            return Self {
+                reference: fallback,
+                transposed: None,
+            };
+        };
+        let y = lu.solve(&vec![1.0; map.free.len()]);
+        let mut z = vec![0.0; y.len()];
+        modes.system.mass.mul_vec(&y, &mut z);
+        let rows = lu_t.solve(&z);
+        let reference = rows
+            .iter()
+            .zip(&fallback)
+            .map(|(&r, &f)| if r.is_finite() && r > 0.0 { r } else { f })
+            .collect();
+        Self {
+            reference,
+            transposed: Some(lu_t),
+        }
+    }
+}
+
+/// The loads of the D-NURBS's free control points other than gravity, carried to the free
+/// nodes by `Ω_ff⁻ᵀ` (exact on a Greville lattice); `None` when there are none, a warning
+/// when they cannot be carried.
+fn node_loads(
+    setup: &Setup,
+    config: &Config,
+    modes: &DnurbsModes,
+    pullback: &Pullback,
+    warnings: &mut Vec<String>,
+) -> Vec<[f64; 3]> {
+    let sys = &modes.system;
+    let model = setup.model();
+    let s_m = scalar_rows(&model.matrices().mass);
+    let mut ones = vec![0.0; s_m.nrows()];
+    s_m.mul_vec(&vec![1.0; s_m.ncols()], &mut ones);
+    let g = config.loads.gravity;
+    let other: Vec<[f64; 3]> = sys
+        .free
+        .iter()
+        .zip(&sys.load)
+        .map(|(&k, f)| [0, 1, 2].map(|x| f[x] - ones[k] * g[x]))
+        .collect();
+    let size = |v: &[[f64; 3]]| v.iter().flatten().fold(0.0_f64, |a, x| a.max(x.abs()));
+    let scale = size(&sys.load).max(f64::MIN_POSITIVE);
+    let n = setup.lattice().n_nodes();
+    if size(&other) <= NO_LOAD * scale {
+        return Vec::new();
+    }
+    let Some(lu_t) = &pullback.transposed else {
+        warnings.push(
+            "loads other than gravity (distributed, point loads, or a rest shape out of equilibrium) are not carried to this lattice: use the Greville grid".to_string(),
+        );
+        return Vec::new();
+    };
+    let mut out = vec![[0.0; 3]; n];
+    let free = &setup
+        .lattice()
+        .fixed
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| !**f)
+        .map(|(a, _)| a)
+        .collect::<Vec<_>>();
+    for x in 0..3 {
+        let col: Vec<f64> = other.iter().map(|f| f[x]).collect();
+        for (i, v) in lu_t.solve(&col).into_iter().enumerate() {
+            out[free[i]][x] = v;
+        }
+    }
+    out
+}
+
+/// The linear classes of the lattice with their unit matrices on the free nodes.
+fn class_units(lattice: &SpringLattice, free: &[usize]) -> (Vec<Class>, Vec<SparseMatrix>) {
+    let classes: Vec<Class> = lattice
+        .classes()
+        .into_iter()
+        .filter(|c| matches!(c, Class::Linear(..)))
+        .collect();
+    let units = classes
+        .iter()
+        .map(|&c| lattice.linear_matrix(Some(c)).submatrix(free, free))
+        .collect();
+    (classes, units)
+}
+
+/// The lowest non-rigid D-NURBS modes sampled at the free nodes.
+pub(crate) fn sampled_modes(modes: &DnurbsModes, map: &NodeMap, count: usize) -> Vec<SampledMode> {
+    (0..modes.basis.len())
+        .filter(|&i| modes.basis.omega[i] > 0.0)
+        .take(count)
+        .map(|i| SampledMode {
+            omega: modes.basis.omega[i],
+            shape: map.at_nodes(&modes.basis.mode(i)),
+        })
+        .collect()
+}
+
+/// A node-space linear model on the free nodes, with its initial state from the D-NURBS's.
+struct NodeModel {
+    system: ScalarSystem,
+    basis: ModalBasis,
+}
+
+fn node_system(
+    setup: &Setup,
+    map: &NodeMap,
+    mass: SparseMatrix,
+    stiffness: SparseMatrix,
+    load: Vec<[f64; 3]>,
+    damping_ratio: f64,
+) -> Result<NodeModel, DeriveError> {
+    let nodes = setup.node_state();
+    let pick = |v: &[[f64; 3]]| -> Vec<[f64; 3]> {
+        map.free
+            .iter()
+            .map(|&a| v.get(a).copied().unwrap_or([0.0; 3]))
+            .collect()
+    };
+    let system = ScalarSystem {
+        free: map.free.clone(),
+        mass,
+        stiffness,
+        damping_ratio,
+        load,
+        displacement: pick(&nodes.displacements),
+        velocity: pick(&nodes.velocities),
+    };
+    let basis = ModalBasis::new(&system.stiffness, &system.mass)?;
+    Ok(NodeModel { system, basis })
+}
+
+/// The exact reduction of the D-NURBS onto the free nodes: `T = K⁻¹ Ωᵀ (Ω K⁻¹ Ωᵀ)⁻¹` maps node
+/// displacements to the control points of least energy, `K_T = (Ω K⁻¹ Ωᵀ)⁻¹ = Tᵀ K T`,
+/// `M_T = Tᵀ M T`, `F_T = Tᵀ f`. With one free node per free control point `T = Ω⁻¹` and the
+/// reduction is exact; with fewer it is Guyan's.
+fn reduction(
+    map: &NodeMap,
+    modes: &DnurbsModes,
+) -> Result<(DenseMatrix, DenseMatrix, Vec<[f64; 3]>), DeriveError> {
+    let sys = &modes.system;
+    let (nn, nc) = (map.free.len(), sys.n());
+    if nn > nc {
+        return Err(DeriveError::InvalidOption {
+            name: "msm.grid",
+            value: format!("{nn} free nodes"),
+            reason: format!(
+                "the reduction needs at most as many free nodes as free control points ({nc}); use grid = \"greville\""
+            ),
+        });
+    }
+    let solver = SpdSolver::new(&sys.stiffness).map_err(|e| DeriveError::InvalidOption {
+        name: "material",
+        value: "K".into(),
+        reason: format!(
+            "the reduction needs a positive-definite stiffness on the free control points: {e}"
+        ),
+    })?;
+    let omega_t = map.omega_ff.transpose();
+    // Y = K⁻¹ Ωᵀ, column by column.
+    let mut y = DenseMatrix::zeros(nc, nn);
+    for j in 0..nn {
+        let mut col = vec![0.0; nc];
+        let (cp, ri, v) = (omega_t.col_ptr(), omega_t.row_idx(), omega_t.values());
+        for k in cp[j]..cp[j + 1] {
+            col[ri[k]] = v[k];
+        }
+        let x = solver.solve(&col);
+        for i in 0..nc {
+            y[(i, j)] = x[i];
+        }
+    }
+    let omega = map.omega_ff.to_dense();
+    let s = omega.matmul(&y);
+    let eig = symmetric_eigen(&s)?;
+    let top = eig.values.last().copied().unwrap_or(0.0);
+    if let Some((i, &l)) = eig
+        .values
+        .iter()
+        .enumerate()
+        .find(|(_, l)| **l <= 1e-13 * top)
+    {
+        let v = eig.vectors.column(i);
+        let worst: Vec<usize> = (0..nn)
+            .filter(|&a| v[a].abs() > 0.1)
+            .map(|a| map.free[a])
+            .collect();
+        return Err(DeriveError::InvalidOption {
+            name: "msm.grid",
+            value: format!("eigenvalue {l:e} of Ω K⁻¹ Ωᵀ"),
+            reason: format!(
+                "the reduction is singular: the nodes {worst:?} do not determine the surface"
+            ),
+        });
+    }
+    let k_t = DenseMatrix::from_fn(nn, nn, |a, b| {
+        (0..nn)
+            .map(|i| eig.vectors[(a, i)] * eig.vectors[(b, i)] / eig.values[i])
+            .sum()
+    });
+    let t = y.matmul(&k_t);
+    let m_t = t.transpose().matmul(&sys.mass.to_dense()).matmul(&t);
+    let mut f_t = vec![[0.0; 3]; nn];
+    for a in 0..nn {
+        for i in 0..nc {
+            for x in 0..3 {
+                f_t[a][x] += t[(i, a)] * sys.load[i][x];
+            }
+        }
+    }
+    Ok((k_t, m_t, f_t))
+}
+
+fn symmetric_sparse(a: &DenseMatrix) -> SparseMatrix {
+    let sym = DenseMatrix::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    SparseMatrix::from_dense(&sym, 0.0)
+}
+
+/// Derives a linear node model of the D-NURBS by `config.method` (modal, excitation or
+/// reduction) and validates it by exact modes; `cancel` stops between steps.
+pub fn derive_linear(
+    config: &Config,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<(Derivation, Setup), DeriveError> {
+    let method = config.method;
+    let setup = Setup::new(config)?;
+    let modes = DnurbsModes::new(&setup, method.name())?;
+    let map = NodeMap::new(&setup, &modes)?;
+    let dual = dual_cell_masses(&setup, config)?;
+    let pullback = Pullback::new(&map, &modes, &dual);
+    let mut warn = Vec::new();
+    let forces = node_loads(&setup, config, &modes, &pullback, &mut warn);
+    let cancelled = || cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed));
+    let ratio = modes.system.damping_ratio;
+    let g = config.loads.gravity;
+    let free_forces = |masses: &[f64]| -> Vec<[f64; 3]> {
+        map.free
+            .iter()
+            .zip(masses)
+            .map(|(&a, &m)| {
+                let f = forces.get(a).copied().unwrap_or([0.0; 3]);
+                [0, 1, 2].map(|x| m * g[x] + f[x])
+            })
+            .collect()
+    };
+    let (lattice, reduction_model, fit, node, rule) = match method {
+        Method::Modal | Method::Excitation => {
+            let (classes, units) = class_units(setup.lattice(), &map.free);
+            let sampled = sampled_modes(&modes, &map, MODES);
+            let modal = modal_fit(&classes, &units, &sampled, &pullback.reference)?;
+            let (constants, masses, fit) = if method == Method::Excitation {
+                let e =
+                    excitation_fit(&modes, &map, &classes, &units, &modal, &pullback.reference)?;
+                warn.extend(e.warnings.iter().cloned());
+                (
+                    e.constants.clone(),
+                    e.masses.clone(),
+                    FitDetail::Excitation(e.report),
+                )
+            } else {
+                (
+                    modal.constants.clone(),
+                    modal.masses.clone(),
+                    FitDetail::Modal(modal.report),
+                )
+            };
+            let mut lattice = setup.lattice().clone();
+            lattice.set_constants(&constants);
+            let mut all = dual.clone();
+            for (i, &a) in map.free.iter().enumerate() {
+                all[a] = masses[i];
+            }
+            lattice.damping = all.iter().map(|m| ratio * m).collect();
+            lattice.masses = all;
+            lattice.forces = forces.clone();
+            let l = lattice.linear_matrix(None).submatrix(&map.free, &map.free);
+            let node = node_system(
+                &setup,
+                &map,
+                SparseMatrix::from_diagonal(&masses),
+                l,
+                free_forces(&masses),
+                ratio,
+            )?;
+            let rule = "masses fitted jointly with the class constants to the lowest D-NURBS modes, then scaled so that the lowest frequency matches".to_string();
+            (Some(lattice), None, fit, node, rule)
+        }
+        Method::Reduction => {
+            let (k_t, m_t, f_t) = reduction(&map, &modes)?;
+            let guyan = !map.is_square();
+            let node = node_system(
+                &setup,
+                &map,
+                symmetric_sparse(&m_t),
+                symmetric_sparse(&k_t),
+                f_t.clone(),
+                ratio,
+            )?;
+            let lattice = setup.lattice();
+            let reduction = NodeReduction {
+                positions: lattice.positions.clone(),
+                params: lattice.params.clone().unwrap_or_default(),
+                free: map.free.clone(),
+                stiffness: k_t,
+                mass: m_t,
+                damping_ratio: ratio,
+                loads: f_t,
+                guyan,
+            };
+            let fit = FitDetail::Reduction(ReductionReport {
+                free_nodes: map.free.len(),
+                free_control_points: modes.system.n(),
+                kind: if guyan { "guyan" } else { "exact" },
+            });
+            let rule = "the node-space mass matrix M_T of the reduction (its row sums are listed as node masses)".to_string();
+            (None, Some(reduction), fit, node, rule)
+        }
+        Method::Paper => {
+            return Err(DeriveError::InvalidOption {
+                name: "fit.derivation",
+                value: "\"paper\"".into(),
+                reason: "the paper's derivation is not a linear one (derive_msm runs it)".into(),
+            });
+        }
+    };
+    if cancelled() {
+        return Err(DeriveError::Cancelled);
+    }
+    // Validation by exact modes (Newmark when damped).
+    let judge = Judge::new(&setup, config, Some(modes))?;
+    let modes = judge.modes().ok_or(DeriveError::LatticeWithoutParameters)?;
+    let reference = judge.reference()?;
+    let positions = &setup.lattice().positions;
+    let watch = node_watch(setup.probe_nodes(), &map.free, positions);
+    let (msm_trajectory, _) =
+        run_scalar(&node.system, &node.basis, &watch, &judge.times, judge.dt)?;
+    let run_name = |kind: crate::reference::ReferenceKind| match kind {
+        crate::reference::ReferenceKind::Modal => "modal".to_string(),
+        crate::reference::ReferenceKind::Newmark => "newmark".to_string(),
+    };
+    let validation_main = validation(
+        &setup,
+        &reference.0,
+        reference.1,
+        &msm_trajectory,
+        run_name(reference.1),
+        judge.horizon,
+        judge.dt,
+    );
+    if cancelled() {
+        return Err(DeriveError::Cancelled);
+    }
+    // The second excitation.
+    let kick = impulse(&setup, initial_speed(setup.dnurbs_initial()))?;
+    let kick_reference = judge.impulse_reference(&kick)?;
+    let kick_nodes = setup.omega().node_state(setup.model(), &kick);
+    let kick_velocity: Vec<[f64; 3]> = map.free.iter().map(|&a| kick_nodes.velocities[a]).collect();
+    let kick_system = unloaded(&node.system, vec![[0.0; 3]; map.free.len()], kick_velocity);
+    let (kick_run, _) = run_scalar(&kick_system, &node.basis, &watch, &judge.times, judge.dt)?;
+    let second_excitation = validation(
+        &setup,
+        &kick_reference.0,
+        kick_reference.1,
+        &kick_run,
+        run_name(kick_reference.1),
+        judge.horizon,
+        judge.dt,
+    );
+    let frequencies = frequency_table(&modes.basis, &map.omega_ff, &node.basis);
+    let spectrum = Spectrum {
+        dnurbs: triplicate(&modes.basis.omega),
+        msm: triplicate(&node.basis.omega),
+    };
+    // Masses: the lattice's, or the reduction's row sums of M_T on the free nodes.
+    let node_masses: Vec<f64> = match &lattice {
+        Some(l) => l.masses.clone(),
+        None => {
+            let mut all = dual.clone();
+            let sums = {
+                let mut y = vec![0.0; map.free.len()];
+                node.system.mass.mul_vec(&vec![1.0; map.free.len()], &mut y);
+                y
+            };
+            for (i, &a) in map.free.iter().enumerate() {
+                all[a] = sums[i];
+            }
+            all
+        }
+    };
+    let fixed = &setup.lattice().fixed;
+    let free_masses: Vec<f64> = map.free.iter().map(|&a| node_masses[a]).collect();
+    let mean = free_masses.iter().sum::<f64>() / free_masses.len() as f64;
+    let mass = with_totals(
+        MassReport {
+            selected: mean,
+            rule,
+            ..MassReport::default()
+        },
+        setup.model(),
+        &node_masses,
+        fixed,
+    );
+    let omega_max = node.basis.omega.last().copied().unwrap_or(0.0);
+    let derived = ParameterSet {
+        constants: lattice
+            .as_ref()
+            .map(SpringLattice::constants)
+            .unwrap_or_else(Constants::new),
+        m: mean,
+        omega_max,
+        dt_critical: if omega_max > 0.0 {
+            2.0 / omega_max
+        } else {
+            f64::INFINITY
+        },
+        dt_exceeds_explicit_limit: omega_max > 0.0 && config.time.dt >= 2.0 / omega_max,
+        relative_residual_all_dofs: None,
+        relative_residual_free_dofs: None,
+        validation: validation_main,
+        explicit_run: None,
+    };
+    warn.extend(warnings(
+        method,
+        &derived.validation,
+        &second_excitation,
+        &frequencies,
+        &mass,
+        &[],
+    ));
+    let derivation = Derivation {
+        method,
+        lattice,
+        reduction: reduction_model,
+        fit,
+        mass,
+        derived,
+        given: None,
+        given_trajectory: None,
+        second_excitation,
+        frequencies,
+        probes: setup.probes().to_vec(),
+        probe_nodes: setup.probe_nodes().to_vec(),
+        dnurbs_trajectory: reference.0,
+        msm_trajectory,
+        node_velocities: setup.node_velocities().to_vec(),
+        spectrum,
+        warnings: warn,
+    };
+    Ok((derivation, setup))
+}

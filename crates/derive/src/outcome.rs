@@ -1,0 +1,257 @@
+//! What every derivation reports (docs/math.md §8): the derived model, the fit, the masses
+//! against the D-NURBS's, stability, a 3-D validation against the exact D-NURBS motion, a
+//! second excitation, a frequency table and the warnings a user should read.
+
+use nurbspring_linalg::DenseMatrix;
+use nurbspring_msm::{Constants, SpringLattice};
+use nurbspring_sim::IntegratorKind;
+use serde::Serialize;
+
+use crate::Trajectory;
+use crate::modal::ModalFitReport;
+use crate::pipeline::FitReport;
+use crate::reference::ReferenceKind;
+use crate::setup::Method;
+
+/// One mass candidate of the paper's scan.
+#[derive(Clone, Debug, Serialize)]
+pub struct MassCandidate {
+    /// Node mass tried.
+    pub m: f64,
+    /// RMS of the central node's z difference to the D-NURBS run (∞ when the MSM run failed).
+    pub rms: f64,
+    /// Max abs of that difference.
+    pub max_abs: f64,
+    /// Integrator used for this candidate.
+    pub integrator: IntegratorKind,
+    /// Why the run stopped early, if it did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
+}
+
+/// The masses: how they were chosen, and their totals against the D-NURBS's.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct MassReport {
+    /// Distinct non-null eigenvalues of the full M, ascending (the paper's candidates).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub eigenvalues: Vec<f64>,
+    /// Distinct eigenvalues of M restricted to the free dofs, ascending.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub eigenvalues_free_dofs: Vec<f64>,
+    /// Every candidate tried with its error (the paper's scan).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub candidates: Vec<MassCandidate>,
+    /// The node mass selected (per-node masses: their mean over the free nodes).
+    pub selected: f64,
+    /// How the masses were chosen.
+    pub rule: String,
+    /// Σ m over every node of the derived model.
+    pub total_msm: f64,
+    /// Σ m over its free nodes.
+    pub free_msm: f64,
+    /// The D-NURBS mass `Σ_ij M_ij / 3`.
+    pub total_dnurbs: f64,
+    /// The free rows' share of it, `Σ_{i free, j} M_ij / 3`.
+    pub free_dnurbs: f64,
+}
+
+/// A 3-D comparison of one probe.
+#[derive(Clone, Debug, Serialize)]
+pub struct ProbeError {
+    /// Parameters of the probe node, where the D-NURBS is watched.
+    pub u: f64,
+    /// Parameter v.
+    pub v: f64,
+    /// The lattice node.
+    pub node: usize,
+    /// `RMS_t |x_MSM − x_DN| / max_t |x_DN − x_DN(0)|`.
+    pub relative_rms: f64,
+    /// `RMS_t |x_MSM − x_DN|`.
+    pub rms: f64,
+}
+
+/// The derived model against the D-NURBS: the central node in 3-D at its own parameters.
+#[derive(Clone, Debug, Serialize)]
+pub struct Validation {
+    /// How the MSM was run: an integrator's name, or `modal` (its exact solution).
+    pub integrator: String,
+    /// How the D-NURBS reference was computed.
+    pub reference: ReferenceKind,
+    /// Length of the comparison [s].
+    pub horizon: f64,
+    /// Sampling step [s].
+    pub dt: f64,
+    /// `RMS_t |x_MSM − x_DN|` of the central node.
+    pub rms: f64,
+    /// `max_t |x_MSM − x_DN|`.
+    pub max_abs: f64,
+    /// `rms / max_t |x_DN − x_DN(0)|`.
+    pub relative_rms: f64,
+    /// The same on the z coordinate alone (the paper's Figure 3 reading).
+    pub relative_rms_z: f64,
+    /// `max_t |x_DN − x_DN(0)|`.
+    pub dnurbs_amplitude: f64,
+    /// Dominant period of the D-NURBS central node.
+    pub dnurbs_period: Option<f64>,
+    /// Dominant period of the MSM central node.
+    pub msm_period: Option<f64>,
+    /// Samples compared.
+    pub samples: usize,
+    /// Why the MSM run stopped early, if it did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub msm_stopped: Option<String>,
+    /// Every probe.
+    pub probes: Vec<ProbeError>,
+}
+
+/// Stability, residuals and validation of a derived (or given) parameter set.
+#[derive(Clone, Debug, Serialize)]
+pub struct ParameterSet {
+    /// The constants (`k_edge`, `k_diag`, `k_bend` and the linear classes in files).
+    #[serde(flatten)]
+    pub constants: Constants,
+    /// Node mass (per-node masses: their mean over the free nodes).
+    pub m: f64,
+    /// ω_max of the linearized MSM at rest.
+    pub omega_max: f64,
+    /// Explicit stability limit 2/ω_max.
+    pub dt_critical: f64,
+    /// Whether the scene's Δt exceeds it.
+    pub dt_exceeds_explicit_limit: bool,
+    /// Relative residual of eq. (15), every dof (the paper's derivation).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relative_residual_all_dofs: Option<f64>,
+    /// Relative residual of eq. (15), free dofs (the paper's derivation).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relative_residual_free_dofs: Option<f64>,
+    /// The comparison with the D-NURBS.
+    pub validation: Validation,
+    /// When the scene's integrator is explicit and Δt exceeds its limit: what that run does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub explicit_run: Option<Validation>,
+}
+
+/// Angular frequencies (rad/s) of both models linearized at rest, ascending, each with its
+/// multiplicity (constant-weight models give triplets; the MSM's zeros are its directions
+/// without linear stiffness).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Spectrum {
+    /// D-NURBS: `K φ = ω² M φ` on the free dofs.
+    pub dnurbs: Vec<f64>,
+    /// MSM: `K_T φ = ω² M_S φ` on the free node dofs.
+    pub msm: Vec<f64>,
+}
+
+/// One line of the frequency table: the i-th distinct frequency of both models and how alike
+/// their shapes are at the nodes.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrequencyRow {
+    /// Mode number, 1 = lowest.
+    pub mode: usize,
+    /// D-NURBS angular frequency.
+    pub dnurbs: f64,
+    /// MSM angular frequency of the same rank.
+    pub msm: f64,
+    /// `msm / dnurbs − 1`.
+    pub relative_difference: f64,
+    /// MAC of the two shapes at the free nodes (none when the MSM's modes are not the
+    /// isotropic triplets of a linear model).
+    pub mac: Option<f64>,
+}
+
+/// The exact reduction of the D-NURBS onto the free nodes (the `reduction` derivation): a
+/// node-space linear model `M_T ẍ + (γ/μ) M_T ẋ + K_T x = F_T`, the same in x, y and z.
+#[derive(Clone, Debug)]
+pub struct NodeReduction {
+    /// Every node's rest position.
+    pub positions: Vec<[f64; 3]>,
+    /// Every node's parameters.
+    pub params: Vec<(f64, f64)>,
+    /// The free nodes, ascending (the rows of the matrices).
+    pub free: Vec<usize>,
+    /// `K_T`, scalar, on the free nodes.
+    pub stiffness: DenseMatrix,
+    /// `M_T`, scalar, on the free nodes.
+    pub mass: DenseMatrix,
+    /// `γ/μ`.
+    pub damping_ratio: f64,
+    /// `F_T` per free node.
+    pub loads: Vec<[f64; 3]>,
+    /// True when there are fewer free nodes than free control points (Guyan).
+    pub guyan: bool,
+}
+
+/// What the reduction reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReductionReport {
+    /// Free nodes.
+    pub free_nodes: usize,
+    /// Free control points.
+    pub free_control_points: usize,
+    /// Exact (square Ω) or Guyan (fewer nodes than control points).
+    pub kind: &'static str,
+}
+
+/// The fit of each derivation.
+#[derive(Clone, Debug, Serialize)]
+#[serde(untagged)]
+pub enum FitDetail {
+    /// The paper's eq. (15), every reading.
+    Paper(FitReport),
+    /// The modal fit.
+    Modal(ModalFitReport),
+    /// The excitation-aware fit.
+    Excitation(crate::excitation::ExcitationReport),
+    /// The exact reduction.
+    Reduction(ReductionReport),
+}
+
+/// Result of a derivation.
+#[derive(Clone, Debug)]
+pub struct Derivation {
+    /// Which derivation.
+    pub method: Method,
+    /// The derived lattice (`None` for the reduction).
+    pub lattice: Option<SpringLattice>,
+    /// The node-space reduction (the `reduction` derivation).
+    pub reduction: Option<NodeReduction>,
+    /// The fit.
+    pub fit: FitDetail,
+    /// The masses.
+    pub mass: MassReport,
+    /// The derived parameters with their stability and validation.
+    pub derived: ParameterSet,
+    /// The scene's own `[msm]` parameters, evaluated the same way (the paper's derivation).
+    pub given: Option<ParameterSet>,
+    /// The MSM run with the scene's own parameters.
+    pub given_trajectory: Option<Trajectory>,
+    /// The validation under an impulse on one off-centre free control point, which the
+    /// model was not derived for.
+    pub second_excitation: Validation,
+    /// Lowest frequencies of both models, side by side.
+    pub frequencies: Vec<FrequencyRow>,
+    /// Probe parameters `(u, v)` (those of the probe nodes), the centre first.
+    pub probes: Vec<(f64, f64)>,
+    /// Lattice node of each probe.
+    pub probe_nodes: Vec<usize>,
+    /// The D-NURBS reference run.
+    pub dnurbs_trajectory: Trajectory,
+    /// The derived MSM run.
+    pub msm_trajectory: Trajectory,
+    /// Initial node velocities `Ω ṗ(0)` (eq. 18), per node.
+    pub node_velocities: Vec<[f64; 3]>,
+    /// Angular frequencies of both linearized models.
+    pub spectrum: Spectrum,
+    /// Every sign of a bad model (docs/math.md §8.6).
+    pub warnings: Vec<String>,
+}
+
+impl Derivation {
+    /// The paper's fit report (the paper's derivation only).
+    pub fn paper_fit(&self) -> Option<&FitReport> {
+        match &self.fit {
+            FitDetail::Paper(f) => Some(f),
+            _ => None,
+        }
+    }
+}

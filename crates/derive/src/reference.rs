@@ -1,0 +1,114 @@
+//! Runs that every derived model is judged by: the D-NURBS and linear node models through
+//! their exact modes when undamped, through Newmark otherwise (docs/math.md §8.5), watched at
+//! the probes.
+
+use nurbspring_linalg::SparseMatrix;
+use nurbspring_sim::{
+    IntegratorKind, LinearModel, RunOptions, Sample, State, SystemMatrix, simulate,
+};
+use serde::Serialize;
+
+use crate::modal_solution::ModalBasis;
+use crate::scalar::ScalarSystem;
+use crate::{DeriveError, Trajectory};
+
+/// Largest number of samples of a validation run.
+pub const MAX_SAMPLES: usize = 20_000;
+
+/// How a reference trajectory was computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReferenceKind {
+    /// The exact modal solution (undamped linear model, constant loads).
+    Modal,
+    /// Newmark average acceleration at the sampling step.
+    Newmark,
+}
+
+/// A point watched on a scalar system: its rest position and its weights on the unknowns
+/// (its displacement is `Σ_a w_a u_a`).
+#[derive(Clone, Debug, Default)]
+pub struct Watch {
+    /// Rest position.
+    pub base: [f64; 3],
+    /// `(unknown, weight)`.
+    pub weights: Vec<(usize, f64)>,
+}
+
+/// Sample times `0, Δt, …` up to `horizon`, Δt the scene's step or coarser to keep at most
+/// [`MAX_SAMPLES`] samples.
+pub fn sample_times(horizon: f64, dt: f64) -> (f64, Vec<f64>) {
+    let steps = (horizon / dt).ceil().max(1.0);
+    let (steps, dt) = if steps > MAX_SAMPLES as f64 {
+        (MAX_SAMPLES, horizon / MAX_SAMPLES as f64)
+    } else {
+        (steps as usize, dt)
+    };
+    (dt, (0..=steps).map(|k| k as f64 * dt).collect())
+}
+
+/// Runs the scalar system `sys` and records the watched points at `times` (spaced `dt`):
+/// exactly by `basis` when undamped, by Newmark otherwise.
+pub fn run_scalar(
+    sys: &ScalarSystem,
+    basis: &ModalBasis,
+    watch: &[Watch],
+    times: &[f64],
+    dt: f64,
+) -> Result<(Trajectory, ReferenceKind), DeriveError> {
+    let mut traj = Trajectory::new(watch.len());
+    traj.t = times.to_vec();
+    if sys.damping_ratio == 0.0 {
+        let weights: Vec<Vec<(usize, f64)>> = watch.iter().map(|w| w.weights.clone()).collect();
+        let response = basis.response(&weights, times, &sys.displacement, &sys.velocity, &sys.load);
+        for (p, (w, r)) in watch.iter().zip(response).enumerate() {
+            traj.probes[p] = r
+                .iter()
+                .map(|d| [w.base[0] + d[0], w.base[1] + d[1], w.base[2] + d[2]])
+                .collect();
+        }
+        return Ok((traj, ReferenceKind::Modal));
+    }
+    // Damped: Newmark on the 3-D system M ü + c M u̇ + K u = f.
+    let m3 = sys.mass.kron_identity(3);
+    let mut d3 = m3.clone();
+    d3.scale(sys.damping_ratio);
+    let n3 = m3.nrows();
+    let model = LinearModel {
+        mass: SystemMatrix::Sparse(m3),
+        damping: Some(SystemMatrix::Sparse(d3)),
+        stiffness: sys.stiffness.kron_identity(3),
+        rest: vec![0.0; n3],
+        force: sys.load.iter().flatten().copied().collect(),
+    };
+    let initial = State::new(
+        sys.displacement.iter().flatten().copied().collect(),
+        sys.velocity.iter().flatten().copied().collect(),
+    );
+    let t_end = times.last().copied().unwrap_or(0.0);
+    let opts = RunOptions::new(dt, t_end, IntegratorKind::Newmark);
+    let mut probes = vec![Vec::with_capacity(times.len()); watch.len()];
+    let mut observer = |s: &Sample<'_>| {
+        for (p, w) in watch.iter().enumerate() {
+            let mut x = w.base;
+            for &(a, c) in &w.weights {
+                for k in 0..3 {
+                    x[k] += c * s.q[3 * a + k];
+                }
+            }
+            probes[p].push(x);
+        }
+    };
+    simulate(&model, initial, &opts, &mut observer)?;
+    traj.probes = probes;
+    traj.t.truncate(traj.probes.first().map_or(0, Vec::len));
+    Ok((traj, ReferenceKind::Newmark))
+}
+
+/// The scalar rows of a 3-D interleaved matrix with identical x, y, z blocks: entry
+/// `(3a, 3k)` for every row `a` and column `k` (the Ω of constant weights is `R ⊗ I₃`).
+pub fn scalar_rows(a: &SparseMatrix) -> SparseMatrix {
+    let rows: Vec<usize> = (0..a.nrows() / 3).map(|r| 3 * r).collect();
+    let cols: Vec<usize> = (0..a.ncols() / 3).map(|c| 3 * c).collect();
+    a.submatrix(&rows, &cols)
+}

@@ -1,0 +1,113 @@
+//! The scalar structure of a constant-weight D-NURBS (docs/math.md §3): `M = S_M ⊗ I₃`,
+//! `K = S_K ⊗ I₃`, so its motion is three copies of one scalar system on the free control
+//! points, one per coordinate. The linear derivations (modal, excitation, reduction) work on
+//! this scalar system.
+
+use nurbspring_dnurbs::DnurbsModel;
+use nurbspring_linalg::SparseMatrix;
+use nurbspring_sim::{DynamicModel, State};
+
+use crate::DeriveError;
+
+/// A linear scalar system, one copy per coordinate: `M ü + c M u̇ + K u = f` for the
+/// displacements `u` of its unknowns (the free control points of a D-NURBS, or the free nodes
+/// of a linear node model), with its initial state and constant load.
+#[derive(Clone, Debug)]
+pub struct ScalarSystem {
+    /// The unknowns: free control points or free nodes, ascending.
+    pub free: Vec<usize>,
+    /// `M` (`S_M` of a D-NURBS).
+    pub mass: SparseMatrix,
+    /// `K` (`S_K` of a D-NURBS).
+    pub stiffness: SparseMatrix,
+    /// `c`: the damping is this multiple of the mass (`γ/μ` of a D-NURBS).
+    pub damping_ratio: f64,
+    /// The constant load per unknown (`f_ext − f_int(q(0))` of a D-NURBS).
+    pub load: Vec<[f64; 3]>,
+    /// Initial displacement from the rest state per unknown.
+    pub displacement: Vec<[f64; 3]>,
+    /// Initial velocity per unknown.
+    pub velocity: Vec<[f64; 3]>,
+}
+
+/// Rows `3a + x` of an interleaved vector as points.
+pub(crate) fn points(v: &[f64]) -> Vec<[f64; 3]> {
+    v.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+impl ScalarSystem {
+    /// The scalar system of the D-NURBS `model` from the state `initial` (reduced
+    /// coordinates) on its free control points. Needs constant weights and no linear
+    /// constraints (`what` names the derivation in the error).
+    pub fn of_dnurbs(
+        model: &DnurbsModel,
+        initial: &State,
+        what: &'static str,
+    ) -> Result<Self, DeriveError> {
+        let refuse = |reason: &str| DeriveError::InvalidOption {
+            name: "fit.derivation",
+            value: format!("\"{what}\""),
+            reason: reason.to_string(),
+        };
+        if model.options().weights_as_dofs {
+            return Err(refuse(
+                "needs constant weights (dnurbs.weights_as_dofs = false)",
+            ));
+        }
+        if model.has_linear_constraints() {
+            return Err(refuse("needs a model without constraints.linear"));
+        }
+        let n_cp = model.geometry().n_control_points();
+        let fixed = model.fixed_points();
+        let free: Vec<usize> = (0..n_cp).filter(|k| !fixed.contains(k)).collect();
+        if free.is_empty() {
+            return Err(refuse("needs at least one free control point"));
+        }
+        // With fixed points only, the free dofs are 3k, 3k+1, 3k+2 of the free points.
+        let x_rows: Vec<usize> = (0..free.len()).map(|i| 3 * i).collect();
+        let mass = model.reduced_mass().submatrix(&x_rows, &x_rows);
+        let stiffness = model.reduced_stiffness().submatrix(&x_rows, &x_rows);
+        let q0 = model.reduced_coordinates(model.p0());
+        let mut f_int = vec![0.0; q0.len()];
+        model.internal_force(&q0, &mut f_int);
+        let load: Vec<f64> = model
+            .reduced_force()
+            .iter()
+            .zip(&f_int)
+            .map(|(f, g)| f - g)
+            .collect();
+        let u0: Vec<f64> = initial.q.iter().zip(&q0).map(|(a, b)| a - b).collect();
+        let material = model.material();
+        Ok(Self {
+            free,
+            mass,
+            stiffness,
+            damping_ratio: material.gamma / material.mu,
+            load: points(&load),
+            displacement: points(&u0),
+            velocity: points(&initial.v),
+        })
+    }
+
+    /// Number of unknowns.
+    pub fn n(&self) -> usize {
+        self.free.len()
+    }
+}
+
+/// `A` applied to each of the three coordinate columns of `x`.
+pub(crate) fn apply3(a: &SparseMatrix, x: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let mut out = vec![[0.0; 3]; a.nrows()];
+    let mut col = vec![0.0; x.len()];
+    let mut y = vec![0.0; a.nrows()];
+    for c in 0..3 {
+        for (v, p) in col.iter_mut().zip(x) {
+            *v = p[c];
+        }
+        a.mul_vec(&col, &mut y);
+        for (o, v) in out.iter_mut().zip(&y) {
+            o[c] = *v;
+        }
+    }
+    out
+}
