@@ -748,11 +748,37 @@ impl<'a> Reader<'a> {
                 ],
                 _ => &[],
             };
-            for &(k, what) in refs {
+            let mut refs: Vec<(usize, String)> =
+                refs.iter().map(|&(k, w)| (k, w.to_string())).collect();
+            // Members of composite curves (102: N, then N pointers) and curves of edge lists
+            // (504: N, then CURV, SVP, SV, TVP, TV per edge).
+            if matches!(e.entity_type, 102 | 504) {
+                self.load(idx)?;
+                let p = &self.params[&idx];
+                let n = p.count(1, "N, the number of curves")?;
+                let (stride, what) = if e.entity_type == 102 {
+                    (1, "a member curve")
+                } else {
+                    (5, "CURV, the curve of an edge")
+                };
+                if (n as u128) * (stride as u128) + 1 > p.len() as u128 {
+                    return Err(ExchangeError::malformed(
+                        p.at(p.list.len()),
+                        format!(
+                            "{} has N = {n} curves but only {} parameters",
+                            e.describe(),
+                            p.len()
+                        ),
+                    ));
+                }
+                refs.extend((0..n).map(|m| (2 + m * stride, what.to_string())));
+            }
+            for (k, what) in &refs {
+                let (k, what) = (*k, what.as_str());
                 self.load(idx)?;
                 let p = &self.params[&idx];
                 let ptr = p.pointer(k, what)?;
-                if ptr == 0 && k > 2 {
+                if ptr == 0 && e.entity_type == 142 && k > 2 {
                     continue; // 142's BPTR or CPTR may be 0 (absent)
                 }
                 let target = self.resolve(ptr, p, k, what)?;
@@ -794,7 +820,10 @@ impl<'a> Reader<'a> {
                 143 | 144 | 510 => {
                     let s = wrapped_surfaces[&idx];
                     let se = &self.entries[s];
+                    let p = &self.params[&idx];
+                    let whole = t == 144 && p.int(2, "N1")? == 0 && p.int(3, "N2")? == 0;
                     let trimming = match t {
+                        _ if whole => "its boundary is the surface's own, so nothing is lost",
                         143 => "its boundary curves are not applied",
                         144 => "its trimming curves are not applied",
                         _ => "its loops are not applied",

@@ -25,7 +25,7 @@ pub struct WriteOptions {
     /// Global 18 and 25: date and time, `YYYYMMDD.HHNNSS`. Fixed by default so that a file's
     /// bytes depend on its shapes only.
     pub timestamp: String,
-    /// Lines of the Start section (free text, cut to 72 columns each).
+    /// Lines of the Start section (free text; longer lines continue on the next record).
     pub start: Vec<String>,
 }
 
@@ -41,8 +41,7 @@ impl Default for WriteOptions {
             model_scale: 1.0,
             timestamp: "20000101.000000".into(),
             start: vec![
-                "nurbspring-exchange: rational B-spline curves (entity 126) and surfaces (128)"
-                    .into(),
+                "nurbspring-exchange: rational B-spline curves (126) and surfaces (128)".into(),
             ],
         }
     }
@@ -69,11 +68,15 @@ pub fn write(shapes: &[Shape]) -> String {
 pub fn write_with(shapes: &[Shape], options: &WriteOptions) -> String {
     let mut out = String::new();
     // Start section.
-    let mut start_lines: Vec<String> = options
-        .start
-        .iter()
-        .map(|l| sanitize(l).chars().take(72).collect())
-        .collect();
+    // Start section: each line of text in pieces of 72 columns.
+    let mut start_lines: Vec<String> = Vec::new();
+    for l in &options.start {
+        let chars: Vec<char> = sanitize(l).chars().collect();
+        if chars.is_empty() {
+            start_lines.push(String::new());
+        }
+        start_lines.extend(chars.chunks(72).map(|c| c.iter().collect::<String>()));
+    }
     if start_lines.is_empty() {
         start_lines.push(String::new());
     }
@@ -95,7 +98,7 @@ pub fn write_with(shapes: &[Shape], options: &WriteOptions) -> String {
         hollerith(&options.product_id),
         hollerith(&options.file_name),
         hollerith("nurbspring"),
-        hollerith(concat!("nurbspring-exchange ", env!("CARGO_PKG_VERSION"))),
+        hollerith("nurbspring-exchange"),
         "32".into(),
         "308".into(),
         "15".into(),

@@ -256,9 +256,8 @@ def part2():
         ent = model.Entity(i)
         if ent.TypeNumber() in (126, 128):
             parsed.append(dict(de=2 * i - 1, type=ent.TypeNumber(), **parsed_entity(ent)))
-    check = r.GetStatsTransfer  # presence only; the load check is below
-    del check
-    n_fail = model.GlobalCheck().NbFails() if hasattr(model, "GlobalCheck") else 0
+    checks = r.WS().ModelCheckList()  # the load checks of every entity and the model
+    n_fail = model.GlobalCheck().NbFails()
     g = model.GlobalSection()
     data = {
         "ocp": "cadquery-ocp-novtk 8.0.1.1.0 (Open CASCADE 8.0)",
@@ -266,11 +265,14 @@ def part2():
                    "scale": g.Scale(), "version": g.IGESVersion(),
                    "unit_factor": model.GlobalSection().UnitValue()},
         "global_check_fails": n_fail,
+        "model_check_status": str(checks.Status()).split(".")[-1],
+        "model_check_fails_empty": checks.IsEmpty(True),
         "parsed": parsed,
         **back,
         "checked": [
             "IGESControl_Reader.ReadFile returned IFSelect_RetDone",
-            "the model's global check has no fails (global_check_fails)",
+            "the model's global check has no fails (global_check_fails) and the load check list "
+            "of all entities has no fails (model_check_status, model_check_fails_empty)",
             "TransferRoots made faces and edges of it (transfer_roots)",
             "parsed: K, M, knots, weights, poles, parameter range of every 126/128 as OCP's "
             "IGESGeom entities hold them; the Rust test compares them bit for bit with the shapes "
