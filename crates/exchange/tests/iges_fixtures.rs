@@ -39,7 +39,7 @@ fn compare(shape: &Shape, entity: &Value) -> f64 {
     worst
 }
 
-fn shape_at<'a>(report: &'a ReadReport, de: u64) -> &'a Shape {
+fn shape_at(report: &ReadReport, de: u64) -> &Shape {
     let i = report
         .entities
         .iter()

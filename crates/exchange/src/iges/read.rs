@@ -123,8 +123,7 @@ fn read_global(s: &Sections<'_>) -> Result<Global, ExchangeError> {
         } else {
             match (c.get(*i), pd) {
                 (Some(&x), Some(p)) if x == p => Ok(default),
-                (Some(&x), None) if x == ',' => Ok(default),
-                (Some(&x), _) if x == ';' && pd.is_some() => Ok(default),
+                (Some(','), None) | (Some(';'), Some(_)) => Ok(default),
                 (found, _) => Err(ExchangeError::malformed(
                     text.at(*i),
                     format!(
@@ -1175,13 +1174,15 @@ fn read_128(
         .collect::<Result<_, _>>()?;
     let (nu, nv) = (k1 as u128 + 1, k2 as u128 + 1);
     let (a, b) = (k1 as u128 + m1 as u128 + 2, k2 as u128 + m2 as u128 + 2);
+    // At most (2^63)^2: u128 holds it; the sums saturate rather than overflow.
     let c = nu * nv;
-    check_length(p, 9 + a + b + 4 * c, || {
+    let needed = c.saturating_mul(4).saturating_add(9 + a + b);
+    check_length(p, needed, || {
         format!(
             "K1 = {k1}, K2 = {k2}, M1 = {m1}, M2 = {m2} need {} (9 flags, K1 + M1 + 2 = {a} \
              knots S, K2 + M2 + 2 = {b} knots T, (K1 + 1)(K2 + 1) = {c} weights and 3 × {c} \
              coordinates)",
-            9 + a + b + 4 * c
+            needed
         )
     })?;
     let (nu, nv, a, b, c) = (nu as usize, nv as usize, a as usize, b as usize, c as usize);
