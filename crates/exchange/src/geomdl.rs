@@ -182,7 +182,7 @@ pub fn read_file(path: impl AsRef<Path>) -> Result<Vec<Shape>, ExchangeError> {
     read(&fsio::read_text(path.as_ref())?)
 }
 
-/// Writes shapes to a geomdl JSON file (see [`write`]).
+/// Writes shapes to a geomdl JSON file (see [`write()`]).
 pub fn write_file(path: impl AsRef<Path>, shapes: &[Shape]) -> Result<(), ExchangeError> {
     fsio::write_text(path.as_ref(), &write(shapes)?)
 }

@@ -16,7 +16,7 @@
 //! so OBJ position `j n_u + i` is nurbspring's `k = i n_v + j`. Points are Cartesian: OBJ's
 //! rational basis is `Σ N_i w_i P_i / Σ N_i w_i` with `P_i = (x, y, z)`.
 //!
-//! The reader reads what [`write`] writes and the same statements from other writers: comments,
+//! The reader reads what [`write()`] writes and the same statements from other writers: comments,
 //! `\` continuation lines, `v/vt/vn` references, negative (relative) vertex indices. Polygonal
 //! statements (`f`, `l`, `p`, `vt`, `vn`), grouping and display attributes are ignored. Bezier,
 //! Cardinal, Taylor and basis-matrix curves, 2-D curves (`curv2`), trimming (`trim`, `hole`,
@@ -150,12 +150,12 @@ pub fn read(text: &str) -> Result<Vec<Shape>, ExchangeError> {
     Ok(r.shapes)
 }
 
-/// Reads an OBJ file (a regular file of at most [`crate::MAX_FILE_BYTES`]); see [`read`].
+/// Reads an OBJ file (a regular file of at most [`crate::MAX_FILE_BYTES`]); see [`read()`].
 pub fn read_file(path: impl AsRef<Path>) -> Result<Vec<Shape>, ExchangeError> {
     read(&fsio::read_text(path.as_ref())?)
 }
 
-/// Writes shapes to an OBJ file; see [`write`].
+/// Writes shapes to an OBJ file; see [`write()`].
 pub fn write_file(path: impl AsRef<Path>, shapes: &[Shape]) -> Result<(), ExchangeError> {
     fsio::write_text(path.as_ref(), &write(shapes))
 }

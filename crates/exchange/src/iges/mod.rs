@@ -50,7 +50,7 @@ pub use write::{WriteOptions, write, write_with};
 
 use crate::{ExchangeError, Shape, fsio};
 
-/// What [`read`] found in an IGES file.
+/// What [`read()`] found in an IGES file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReadReport {
     /// Every entity 126 and 128, in Directory Entry order.
@@ -129,7 +129,7 @@ pub enum SkipKind {
     UnsupportedGeometry,
 }
 
-/// An entity that [`read`] did not import.
+/// An entity that [`read()`] did not import.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Skipped {
     /// The IGES entity type number.
@@ -239,12 +239,12 @@ impl Global {
     }
 }
 
-/// Reads an IGES file (a regular file of at most [`crate::MAX_FILE_BYTES`]); see [`read`].
+/// Reads an IGES file (a regular file of at most [`crate::MAX_FILE_BYTES`]); see [`read()`].
 pub fn read_file(path: impl AsRef<Path>) -> Result<ReadReport, ExchangeError> {
     read(&fsio::read_text(path.as_ref())?)
 }
 
-/// Writes shapes to an IGES file with default options; see [`write`].
+/// Writes shapes to an IGES file with default options; see [`write()`].
 pub fn write_file(path: impl AsRef<Path>, shapes: &[Shape]) -> Result<(), ExchangeError> {
     fsio::write_text(path.as_ref(), &write(shapes))
 }
