@@ -47,7 +47,6 @@ from OCP.OCP.gp import gp_Pnt
 from OCP.OCP.IFSelect import IFSelect_RetDone
 from OCP.OCP.IGESControl import IGESControl_Reader, IGESControl_Writer
 from OCP.OCP.IGESData import IGESData_IGESWriter
-from OCP.OCP.IGESGeom import IGESGeom_BSplineCurve, IGESGeom_BSplineSurface
 from OCP.OCP.IGESSelect import IGESSelect_WorkLibrary
 from OCP.OCP.IGESToBRep import IGESToBRep_BasicCurve, IGESToBRep_BasicSurface
 from OCP.OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
@@ -162,7 +161,7 @@ def read_back(path):
         types[str(t)] = types.get(str(t), 0) + 1
         de = 2 * i - 1
         if t == 128:
-            g = conv_s.TransferBSplineSurface(IGESGeom_BSplineSurface.DownCast(ent) if hasattr(IGESGeom_BSplineSurface, "DownCast") else ent)
+            g = conv_s.TransferBSplineSurface(ent)  # OCP hands out the IGESGeom_BSplineSurface
             entities.append(dict(de=de, type=128, unit_factor=conv_s.GetUnitFactor(), **eval_surface(g)))
         elif t == 126:
             g = conv_c.TransferBSplineCurve(ent)
