@@ -380,6 +380,89 @@ fn bad_scenes_exit_2_with_a_message() {
     }
 }
 
+/// Bad derivation input: exit code 2 and a message naming the key, for the scene key and the
+/// command-line flag alike.
+#[test]
+fn derivation_refusals_exit_2_naming_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let paper_text = std::fs::read_to_string(paper()).unwrap();
+    let quiet = paper_text.replacen(
+        "velocity = [0.0, 0.0, -0.2]",
+        "velocity = [0.0, 0.0, 0.0]",
+        1,
+    );
+    assert_ne!(
+        quiet, paper_text,
+        "the paper's scene sets an initial velocity"
+    );
+    let string = std::fs::read_to_string(examples().join("string.toml")).unwrap();
+    let cases: Vec<(&str, String, Vec<&str>, &str)> = vec![
+        (
+            "excitation without excitation",
+            quiet,
+            vec!["--derivation", "excitation"],
+            "initial.velocity",
+        ),
+        (
+            "reduction onto more nodes than control points",
+            paper_text.replacen(
+                "[msm]",
+                "[msm]\ngrid = \"uniform\"\nnodes_u = 12\nnodes_v = 9",
+                1,
+            ),
+            vec!["--derivation", "reduction"],
+            "msm.grid",
+        ),
+        (
+            "twist on a curve",
+            string.clone() + "\n[msm]\nelements = [\"twist\"]\n",
+            vec![],
+            "msm.elements",
+        ),
+        (
+            "a kind twice",
+            paper_text.replacen("[msm]", "[msm]\nelements = [\"bend_u\", \"bend_u\"]", 1),
+            vec![],
+            "msm.elements",
+        ),
+        (
+            "no kind",
+            paper_text.replacen("[msm]", "[msm]\nelements = []", 1),
+            vec![],
+            "msm.elements",
+        ),
+        (
+            "unknown derivation",
+            paper_text.replacen("[fit]", "[fit]\nderivation = \"magic\"", 1),
+            vec![],
+            "derivation",
+        ),
+    ];
+    for (name, text, args, key) in cases {
+        let p = scene(
+            dir.path(),
+            &format!("{}.toml", name.replace(' ', "_")),
+            &text,
+        );
+        let out_dir = dir.path().join(format!("out_{}", name.replace(' ', "_")));
+        let out = bin()
+            .arg("derive")
+            .arg(&p)
+            .args(&args)
+            .arg("--out")
+            .arg(&out_dir)
+            .assert()
+            .code(2);
+        let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+        assert!(err.contains(key), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        assert!(
+            !out_dir.exists() || std::fs::read_dir(&out_dir).unwrap().next().is_none(),
+            "{name}: output left"
+        );
+    }
+}
+
 #[test]
 fn missing_file_is_exit_2() {
     let out = bin()

@@ -1,4 +1,4 @@
-//! The judgement every derivation shares (docs/math.md §8.5–8.6): the horizon, the D-NURBS
+//! The judgement every derivation shares (docs/math.md §8.6–8.7): the horizon, the D-NURBS
 //! reference, the 3-D validation of the probes, the second excitation, the frequency table,
 //! the masses against the D-NURBS's, and the warnings.
 
@@ -359,7 +359,14 @@ pub fn warnings(
     let pct = |x: f64| 100.0 * x;
     // NaN (no motion to compare) counts as a bad sign too.
     let above = |x: f64, limit: f64| x.is_nan() || x > limit;
-    if above(validation.relative_rms, WARN_RELATIVE_RMS) {
+    if validation.dnurbs_amplitude == 0.0 {
+        out.push(
+            "the scene's initial state and loads do not move the D-NURBS, so its own motion \
+             validates nothing; only the second excitation does (give initial.velocity, \
+             initial.displacement or loads)"
+                .into(),
+        );
+    } else if above(validation.relative_rms, WARN_RELATIVE_RMS) {
         out.push(format!(
             "the central node's relative RMS against the D-NURBS is {:.1}% over {:.3} s (above {:.0}%)",
             pct(validation.relative_rms),

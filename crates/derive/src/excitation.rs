@@ -142,7 +142,7 @@ pub fn excitation_fit(
     if total.is_nan() || total <= 0.0 {
         return Err(DeriveError::InvalidOption {
             name: "initial.velocity",
-            value: "no excitation".into(),
+            value: "0 everywhere, and no displacement or load".into(),
             reason: "the excitation derivation weights the modes the scene's initial velocity and loads excite, and this scene excites none (give initial.velocity, initial.displacement or loads)".into(),
         });
     }

@@ -60,7 +60,10 @@ pub use excitation::ExcitationReport;
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use linear::derive_linear;
 pub use mass::{distinct_non_null, mass_eigenvalues};
-pub use modal::{MASS_FLOOR, MASS_REGULARIZATION, MODES, ModalFitReport, lowest_frequency};
+pub use modal::{
+    MASS_FLOOR, MASS_REGULARIZATION, MODES, ModalFitReport, ModalSolution, SampledMode,
+    lowest_frequency, modal_fit,
+};
 pub use modal_solution::ModalBasis;
 pub use omega::{NodeState, Omega};
 pub use outcome::{

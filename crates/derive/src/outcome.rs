@@ -242,7 +242,7 @@ pub struct Derivation {
     pub node_velocities: Vec<[f64; 3]>,
     /// Angular frequencies of both linearized models.
     pub spectrum: Spectrum,
-    /// Every sign of a bad model (docs/math.md §8.6).
+    /// Every sign of a bad model (docs/math.md §8.7).
     pub warnings: Vec<String>,
 }
 

@@ -1,5 +1,5 @@
 //! Runs that every derived model is judged by: the D-NURBS and linear node models through
-//! their exact modes when undamped, through Newmark otherwise (docs/math.md §8.5), watched at
+//! their exact modes when undamped, through Newmark otherwise (docs/math.md §8.6), watched at
 //! the probes.
 
 use nurbspring_linalg::SparseMatrix;

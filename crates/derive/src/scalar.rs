@@ -70,11 +70,24 @@ impl ScalarSystem {
         let q0 = model.reduced_coordinates(model.p0());
         let mut f_int = vec![0.0; q0.len()];
         model.internal_force(&q0, &mut f_int);
+        // `f_int(q0) = K q0 + f_int0` vanishes at the reference in exact arithmetic; what is
+        // left is rounding of size eps·|K|·|q0|, which is not a load and must not excite modes.
+        let k = model.reduced_stiffness();
+        let k_scale = k
+            .col_ptr()
+            .windows(2)
+            .map(|w| k.values()[w[0]..w[1]].iter().map(|x| x.abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        let q_scale = q0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let rounding = 1e3 * f64::EPSILON * k_scale * q_scale;
         let load: Vec<f64> = model
             .reduced_force()
             .iter()
             .zip(&f_int)
-            .map(|(f, g)| f - g)
+            .map(|(f, g)| {
+                let l = f - g;
+                if l.abs() <= rounding { 0.0 } else { l }
+            })
             .collect();
         let u0: Vec<f64> = initial.q.iter().zip(&q0).map(|(a, b)| a - b).collect();
         let material = model.material();

@@ -281,11 +281,17 @@ impl Scene {
         Ok(options)
     }
 
-    /// The derivation's configuration for `method` (`None`: the scene's `fit.derivation`);
-    /// for the paper's derivation the scene's `[msm]` constants and mass are kept as the
-    /// "given" parameters, evaluated beside the derived ones.
+    /// The derivation the scene asks for, and why when it is not the one named (see
+    /// [`crate::spec::FitSpec::derivation_for`]).
+    pub fn derivation(&self) -> (Method, Option<&'static str>) {
+        self.fit.derivation_for(&self.dnurbs, &self.constraints)
+    }
+
+    /// The derivation's configuration for `method` (`None`: [`Scene::derivation`]); for the
+    /// paper's derivation the scene's `[msm]` constants and mass are kept as the "given"
+    /// parameters, evaluated beside the derived ones.
     pub fn derivation_config(&self, method: Option<Method>) -> Result<Config, Error> {
-        let method = method.unwrap_or(self.fit.derivation);
+        let method = method.unwrap_or(self.derivation().0);
         let geometry = self.build_geometry()?;
         let fit = &self.fit;
         Ok(Config {

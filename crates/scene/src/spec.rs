@@ -406,8 +406,10 @@ impl<'de> Deserialize<'de> for MsmFixed {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FitSpec {
-    /// Which derivation: `"modal"` (default), `"paper"`, `"excitation"` or `"reduction"`.
-    pub derivation: Method,
+    /// Which derivation: `"modal"`, `"paper"`, `"excitation"` or `"reduction"`; absent, see
+    /// [`crate::Scene::derivation`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub derivation: Option<Method>,
     /// Which dofs enter eq. (15).
     pub dofs: FitDofs,
     /// Constrain the spring constants to k ≥ 0.
@@ -418,6 +420,38 @@ pub struct FitSpec {
     pub mass: MassMethod,
     /// Candidate masses tried (0 = every distinct eigenvalue).
     pub max_candidates: usize,
+}
+
+impl FitSpec {
+    /// The derivation a scene asks for: `fit.derivation`, else `modal`, or `paper` (with the
+    /// reason) for a scene the linear derivations cannot take: weights as unknowns, or
+    /// `[[constraints.linear]]` rows (the D-NURBS is then not three identical scalar systems,
+    /// docs/math.md §8.2).
+    pub fn derivation_for(
+        &self,
+        dnurbs: &DnurbsOptions,
+        constraints: &ConstraintsSpec,
+    ) -> (Method, Option<&'static str>) {
+        if let Some(m) = self.derivation {
+            (m, None)
+        } else if dnurbs.weights_as_dofs {
+            (
+                Method::Paper,
+                Some(
+                    "the scene has weights as unknowns (dnurbs.weights_as_dofs), which the modal derivation cannot take: using the paper's (choose one with fit.derivation or --derivation)",
+                ),
+            )
+        } else if !constraints.linear.is_empty() {
+            (
+                Method::Paper,
+                Some(
+                    "the scene has constraints.linear rows, which the modal derivation cannot take: using the paper's (choose one with fit.derivation or --derivation)",
+                ),
+            )
+        } else {
+            (Method::Modal, None)
+        }
+    }
 }
 
 /// Choice of the node mass (Section III).

@@ -134,7 +134,8 @@ pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneErro
         info.as_ref(),
         &mut p,
     );
-    check_msm(&raw.msm, &raw.loads, &raw.fit, info.as_ref(), &mut p);
+    let method = raw.fit.derivation_for(&raw.dnurbs, &raw.constraints).0;
+    check_msm(&raw.msm, &raw.loads, method, info.as_ref(), &mut p);
     if raw.output.vtk_every == 0 {
         p.push("output.vtk_every", "0", "must be at least 1");
     }
@@ -869,12 +870,11 @@ fn time_problem(p: &mut Problems, key: &str, value: f64, what: &str) {
 fn check_msm(
     m: &MsmSpec,
     loads: &LoadsSpec,
-    fit: &FitSpec,
+    method: Method,
     info: Option<&GeomInfo>,
     p: &mut Problems,
 ) {
     let curve = info.is_some_and(|g| !g.surface);
-    let method = fit.derivation;
     if let Some(kinds) = &m.elements {
         if kinds.is_empty() {
             p.push(
@@ -882,6 +882,15 @@ fn check_msm(
                 "[]",
                 "list at least one kind of linear element",
             );
+        }
+        for (i, k) in kinds.iter().enumerate() {
+            if kinds[..i].contains(k) {
+                p.push(
+                    "msm.elements",
+                    format!("\"{}\"", k.name()),
+                    "each kind may be listed once",
+                );
+            }
         }
         if curve {
             for k in kinds.iter().filter(|k| !LinearKind::CHAIN.contains(k)) {

@@ -1004,10 +1004,10 @@ fn scene() -> impl Strategy<Value = Scene> {
                     elements: None,
                 },
                 fit: FitSpec {
-                    derivation: if fit == 1 {
-                        Method::Paper
-                    } else {
-                        Method::Modal
+                    derivation: match fit {
+                        1 => Some(Method::Paper),
+                        2 => Some(Method::Modal),
+                        _ => None,
                     },
                     dofs: if nonneg { FitDofs::Free } else { FitDofs::All },
                     nonnegative: nonneg,

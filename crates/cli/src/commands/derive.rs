@@ -36,7 +36,11 @@ fn parse_method(s: &str) -> Result<Method, String> {
 /// Derives the MSM of a scene and writes every output.
 pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
-    let config = scene.derivation_config(args.derivation)?;
+    let (method, fallback) = match args.derivation {
+        Some(m) => (m, None),
+        None => scene.derivation(),
+    };
+    let config = scene.derivation_config(Some(method))?;
     let out = prepare_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
     let cancel = Some(ctx.cancel.clone());
@@ -52,8 +56,10 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
         _ => nurbspring_derive::derive_linear(&config, cancel),
     };
     let (derivation, _) = result.map_err(|e| {
+        // An option error names its own key; other input errors are the derivation's.
+        let named = matches!(e, nurbspring_derive::DeriveError::InvalidOption { .. });
         let input = e.kind() == nurbspring_sim::ErrorKind::Input;
-        Error::model(&scene.path, input.then_some(key), e)
+        Error::model(&scene.path, (input && !named).then_some(key), e)
     })?;
     bar.finish();
     let label = args.scene.display().to_string();
@@ -61,17 +67,24 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     if ctx.verbose() {
         let d = &derivation.derived;
         println!(
-            "derived MSM ({}): {}, m = {:.6}; dt_critical = {:.5}; central node rel. RMS = {:.4} over {:.3} s ({}), second excitation {:.4}",
+            "derived MSM ({}): {}, m = {:.6}; dt_critical = {:.5}; central node rel. RMS = {} over {:.3} s ({}), second excitation {:.4}",
             derivation.method.name(),
             constants_text(&d.constants, 6),
             d.m,
             d.dt_critical,
-            d.validation.relative_rms,
+            if d.validation.relative_rms.is_nan() {
+                "n/a".to_string()
+            } else {
+                format!("{:.4}", d.validation.relative_rms)
+            },
             d.validation.horizon,
             d.validation.integrator,
             derivation.second_excitation.relative_rms
         );
         println!("Outputs in {}", out.display());
+    }
+    if let Some(why) = fallback {
+        eprintln!("note: {why}");
     }
     for w in &derivation.warnings {
         eprintln!("warning: {w}");

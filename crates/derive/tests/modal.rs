@@ -1,0 +1,90 @@
+//! The modal fit on problems whose answer is known.
+
+use nurbspring_derive::{SampledMode, mac, modal_fit};
+use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_linalg::{SparseMatrix, generalized_symmetric_eigen};
+use nurbspring_msm::{
+    Class, Constants, FixedNodes, LatticeOptions, LinearKind, ParameterGrid, SpringLattice,
+};
+
+/// The fit solves its normal equations: round-off of a squared condition number.
+const RECOVERY: f64 = 1e-8;
+
+/// A lattice whose L and masses are known: its own modes fed to the fit give back its
+/// stiffness and masses (the eigen-equation, normalization and regularization residuals all
+/// vanish there, and the calibration factor is 1).
+#[test]
+fn recovers_a_synthetic_lattice() {
+    let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+    let pts = vec![[0., 0., 0.], [0., 1., 0.], [1.5, 0., 0.], [1.5, 1., 0.]];
+    let plane = NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 4]).unwrap();
+    let classes = Class::linear(&LinearKind::ALL);
+    let truth: Vec<f64> = (0..classes.len())
+        .map(|i| 0.5 + 0.25 * (i % 5) as f64)
+        .collect();
+    let (nu, nv) = (7, 6);
+    let fixed: Vec<usize> = (0..nu * nv)
+        .filter(|a| a / nv == 0 || a % nv == 0)
+        .collect();
+    let options = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: nu,
+            nodes_v: nv,
+        },
+        constants: Constants::from_values(&classes, &truth),
+        fixed: FixedNodes::List(fixed.clone()),
+        ..LatticeOptions::default()
+    };
+    let lattice = SpringLattice::from_surface(&plane, &options, &[]).unwrap();
+    let free: Vec<usize> = (0..nu * nv).filter(|a| !fixed.contains(a)).collect();
+    let masses: Vec<f64> = (0..free.len())
+        .map(|i| 1.0 + 0.3 * ((i * 7) % 5) as f64)
+        .collect();
+    let l = lattice.linear_matrix(None).submatrix(&free, &free);
+    let eig = generalized_symmetric_eigen(
+        &l.to_dense(),
+        &SparseMatrix::from_diagonal(&masses).to_dense(),
+    )
+    .unwrap();
+    let modes: Vec<SampledMode> = (0..8)
+        .map(|i| SampledMode {
+            omega: eig.values[i].sqrt(),
+            shape: eig.vectors.column(i),
+        })
+        .collect();
+    let units: Vec<SparseMatrix> = classes
+        .iter()
+        .map(|&c| lattice.linear_matrix(Some(c)).submatrix(&free, &free))
+        .collect();
+    let sol = modal_fit(&classes, &units, &modes, &masses).unwrap();
+    assert!(
+        (sol.report.mass_scale - 1.0).abs() < RECOVERY,
+        "{}",
+        sol.report.mass_scale
+    );
+    // On a uniform grid the classes are not independent (the parallelogram law makes the
+    // twist stencil a combination of the springs along u, v and the diagonals), so what the
+    // modes determine is the stiffness L itself, not each constant.
+    let mut fitted = SparseMatrix::zeros(l.nrows(), l.ncols());
+    for (c, u) in classes.iter().zip(&units) {
+        fitted =
+            SparseMatrix::linear_combination(1.0, &fitted, sol.constants.value(*c), u).unwrap();
+    }
+    let diff = SparseMatrix::linear_combination(1.0, &fitted, -1.0, &l).unwrap();
+    assert!(
+        diff.frobenius_norm() <= RECOVERY * l.frobenius_norm(),
+        "{}",
+        diff.frobenius_norm()
+    );
+    for (a, b) in sol.masses.iter().zip(&masses) {
+        assert!((a - b).abs() <= RECOVERY * b, "{a} vs {b}");
+    }
+    assert!(sol.report.relative_residual < RECOVERY);
+}
+
+/// The MAC is scale- and sign-free and 0 for orthogonal shapes.
+#[test]
+fn mac_of_modes() {
+    assert!((mac(&[1.0, 2.0, 3.0], &[-2.0, -4.0, -6.0]) - 1.0).abs() < 1e-15);
+    assert_eq!(mac(&[1.0, -1.0], &[1.0, 1.0]), 0.0);
+}
