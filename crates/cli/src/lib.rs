@@ -13,7 +13,10 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use clap::{Args, Parser, Subcommand};
-use nurbspring_scene::Error;
+use nurbspring_io::folder::StagedDir;
+use nurbspring_scene::msm_file::{MsmSetup, is_msm_file, load_msm};
+use nurbspring_scene::resources::{Estimate, Job, Limits, Timing};
+use nurbspring_scene::{Error, Scene};
 
 /// Derive mass-spring models that behave like Dynamic NURBS surfaces.
 #[derive(Parser, Debug)]
@@ -37,6 +40,40 @@ pub struct GlobalArgs {
     /// Worker threads (default: all cores).
     #[arg(long, global = true, value_name = "N")]
     threads: Option<usize>,
+    /// Refuse, before allocating anything, a job estimated to need more memory than this
+    /// (bytes, or with a unit: 512M, 4G; default: 80 % of the memory available).
+    #[arg(long, global = true, value_name = "SIZE", value_parser = parse_size)]
+    max_memory: Option<u64>,
+    /// Refuse a run estimated to write more than this (default: 16G, and never more than the
+    /// free space of the output's disk).
+    #[arg(long, global = true, value_name = "SIZE", value_parser = parse_size)]
+    max_output: Option<u64>,
+}
+
+/// A byte count: digits with an optional unit K, M, G or T (powers of 1024; `B`, `iB` allowed).
+fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let upper = t.to_ascii_uppercase();
+    let body = upper
+        .strip_suffix("IB")
+        .or_else(|| upper.strip_suffix('B'))
+        .unwrap_or(&upper);
+    let (digits, shift) = match body.chars().last() {
+        Some('K') => (&body[..body.len() - 1], 10),
+        Some('M') => (&body[..body.len() - 1], 20),
+        Some('G') => (&body[..body.len() - 1], 30),
+        Some('T') => (&body[..body.len() - 1], 40),
+        _ => (body, 0),
+    };
+    let x: f64 = digits
+        .trim()
+        .parse()
+        .map_err(|_| format!("{t:?} is not a size (bytes, or a number with K, M, G or T)"))?;
+    let bytes = x * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("{t:?} is not a size between 1 byte and 16 EiB"));
+    }
+    Ok(bytes as u64)
 }
 
 #[derive(Subcommand, Debug)]
@@ -70,9 +107,41 @@ pub struct Context {
     pub global: GlobalArgs,
     /// Set by Ctrl-C.
     pub cancel: Arc<AtomicBool>,
+    /// Memory and output limits (`--max-memory`, `--max-output`).
+    pub limits: Limits,
 }
 
 impl Context {
+    /// Refuses `job` on `scene` when its estimate exceeds the limits (before anything is
+    /// allocated); `out` is the output folder, whose disk's free space also bounds the output.
+    pub fn check_resources(
+        &self,
+        scene: &Scene,
+        job: Job,
+        out: Option<&Path>,
+    ) -> Result<Estimate, Error> {
+        scene.check_resources(job, &self.limits, out)
+    }
+
+    /// The MSM of an msm.json file or of a scene (see [`load_msm`]), a scene's checked against
+    /// the limits first (`run`: the output folder and the flags' timing of a simulation).
+    pub fn load_msm(
+        &self,
+        path: &Path,
+        overrides: &nurbspring_scene::MsmOverrides,
+        flag: &dyn Fn(&str) -> String,
+        run: Option<(&Path, Timing)>,
+    ) -> Result<MsmSetup, Error> {
+        if is_msm_file(path) {
+            return load_msm(path, overrides, flag);
+        }
+        overrides.validate(flag)?;
+        let scene = Scene::from_path(path)?;
+        let (out, timing) = run.map_or((None, Timing::default()), |(o, t)| (Some(o), t));
+        self.check_resources(&scene, Job::SimulateMsm(timing), out)?;
+        scene.msm_setup(overrides)
+    }
+
     /// True unless `--quiet`.
     pub fn verbose(&self) -> bool {
         !self.global.quiet
@@ -99,16 +168,28 @@ pub fn main_with_args() -> ExitCode {
     let cancel = Arc::new(AtomicBool::new(false));
     {
         let cancel = cancel.clone();
-        // A second Ctrl-C while the first is being honoured ends the process at once.
+        // SIGINT, SIGTERM and SIGHUP ask the run to stop at its next step; a second signal ends
+        // the process at once, except while an output folder is being swapped in (microseconds):
+        // a staged run is then either complete in place or left aside for the next run to remove.
         let _ = ctrlc::set_handler(move || {
-            if cancel.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            if cancel.swap(true, std::sync::atomic::Ordering::SeqCst)
+                && !nurbspring_io::folder::committing()
+            {
                 std::process::exit(i32::from(exit::CANCELLED));
             }
         });
     }
+    let mut limits = Limits::from_system();
+    if let Some(m) = cli.global.max_memory {
+        limits.memory = m;
+    }
+    if let Some(o) = cli.global.max_output {
+        limits.output = o;
+    }
     let ctx = Context {
         global: cli.global.clone(),
         cancel,
+        limits,
     };
     let result = match cli.command {
         Command::Paper(a) => commands::paper::run(&ctx, a),
@@ -147,22 +228,21 @@ fn init_logging(global: &GlobalArgs) {
         .try_init();
 }
 
-/// Resolves an output folder: creates it, refusing a path that exists and is not a folder.
-pub fn prepare_out_dir(dir: &Path) -> Result<PathBuf, Error> {
-    if dir.exists() && !dir.is_dir() {
-        return Err(Error::option(
-            "--out",
-            dir.display(),
-            "exists and is not a folder",
-        ));
-    }
-    std::fs::create_dir_all(dir).map_err(|e| {
-        Error::Output(nurbspring_io::OutputError::Io {
-            path: dir.to_path_buf(),
-            source: e,
-        })
-    })?;
-    Ok(dir.to_path_buf())
+/// Stages a run's output folder (see [`nurbspring_io::folder`]): the command writes into
+/// [`StagedDir::path`] and calls [`commit_out_dir`] when every file is written, so `dir` holds
+/// exactly one complete run; a failed or interrupted run leaves the previous one as it was.
+pub fn stage_out_dir(dir: &Path) -> Result<StagedDir, Error> {
+    StagedDir::create(dir).map_err(|e| match e {
+        nurbspring_io::OutputError::InvalidData { message, .. } => {
+            Error::option("--out", dir.display(), message)
+        }
+        e => Error::Output(e),
+    })
+}
+
+/// Swaps a complete run in (see [`stage_out_dir`]) and returns the folder's path.
+pub fn commit_out_dir(staged: StagedDir) -> Result<PathBuf, Error> {
+    staged.commit().map_err(Error::Output)
 }
 
 /// Pretty JSON of a value, for commands that print JSON on stdout.

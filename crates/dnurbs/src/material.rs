@@ -79,8 +79,8 @@ impl Material {
     pub fn problems(&self, curve: bool) -> Vec<DnurbsError> {
         let mut out = Vec::new();
         for (name, value) in self.named() {
-            let rule = if !value.is_finite() {
-                Some("must be a finite number")
+            let rule = if !nurbspring_sim::representable(value) {
+                Some("must be a finite number of magnitude at most 1e30 (larger values overflow)")
             } else if name == "mu" && value <= 0.0 {
                 Some("the mass density must be positive")
             } else if value < 0.0 {

@@ -6,7 +6,8 @@
 //! `nurbspring-scene`.
 //!
 //! Everything written goes through [`atomic::write_atomic`]: a temporary file in the target's
-//! folder, synced, then renamed, so an interrupted run never leaves a half-written file.
+//! folder, synced, then renamed, so an interrupted run never leaves a half-written file; a run's
+//! output folder is staged and swapped in whole ([`folder::StagedDir`]).
 //!
 //! ```
 //! use nurbspring_io::output::{read_obj, write_csv, write_obj, ObjMesh};
@@ -27,6 +28,7 @@
 
 pub mod atomic;
 mod error;
+pub mod folder;
 pub mod output;
 pub mod plot;
 pub mod vtk;

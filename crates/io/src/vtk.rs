@@ -244,6 +244,7 @@ impl VtkUnstructured {
     /// Writes the grid with the given encoding options.
     pub fn write_with(&self, path: impl AsRef<Path>, format: VtkFormat) -> Result<(), OutputError> {
         let path = path.as_ref();
+        check_finite(path, &self.points, &self.point_data, &self.cell_data)?;
         let xml = self
             .to_xml(format)
             .map_err(|m| OutputError::invalid(path, m))?;
@@ -354,6 +355,7 @@ impl VtkStructured {
     /// Writes the grid with the given encoding options.
     pub fn write_with(&self, path: impl AsRef<Path>, format: VtkFormat) -> Result<(), OutputError> {
         let path = path.as_ref();
+        check_finite(path, &self.points, &self.point_data, &self.cell_data)?;
         let xml = self
             .to_xml(format)
             .map_err(|m| OutputError::invalid(path, m))?;
@@ -614,4 +616,37 @@ impl XmlWriter {
         }
         Ok(())
     }
+}
+
+/// Refuses (naming the array and index) a NaN or infinite point coordinate or data value:
+/// never written to a file.
+fn check_finite(
+    path: &Path,
+    points: &[[f64; 3]],
+    point_data: &[DataArray],
+    cell_data: &[DataArray],
+) -> Result<(), OutputError> {
+    if let Some(i) = points.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+        return Err(OutputError::invalid(
+            path,
+            format!(
+                "point {i} is {:?}: non-finite values are never written",
+                points[i]
+            ),
+        ));
+    }
+    for (kind, arrays) in [("point", point_data), ("cell", cell_data)] {
+        for a in arrays {
+            if let Some(k) = a.values.iter().position(|x| !x.is_finite()) {
+                return Err(OutputError::invalid(
+                    path,
+                    format!(
+                        "{kind} data {:?}, value {k} is {}: non-finite values are never written",
+                        a.name, a.values[k]
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }

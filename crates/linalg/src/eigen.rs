@@ -780,9 +780,21 @@ pub fn largest_generalized_eigenvalue(
             _ => unreachable!("a sparse mass matrix always has a solver"),
         }
     };
+    // At most 400 Lanczos vectors, and at most LANCZOS_BYTES of them: on large models the
+    // basis (and its full reorthogonalization, O(m² n)) would dominate memory and time; an
+    // unconverged top Ritz value is bounded below.
     const M_MAX: usize = 400;
-    let res = lanczos_largest(n, &mut op, &b, &[], 1, 0, tol, M_MAX, 0xB16_B00B5, None)?;
-    let (theta, resid) = (res.values[0], res.residuals[0]);
+    const LANCZOS_BYTES: usize = 64 << 20;
+    let m_max = (LANCZOS_BYTES / (8 * n)).clamp(40, M_MAX);
+    let res = lanczos_largest(n, &mut op, &b, &[], 1, 0, tol, m_max, 0xB16_B00B5, None)?;
+    // No Ritz value at all: the Krylov space collapsed at its first vector, which a non-zero K
+    // only allows when M⁻¹K underflows (masses near the top of the f64 range).
+    let (Some(&theta), Some(&resid)) = (res.values.first(), res.residuals.first()) else {
+        return Err(LinalgError::NoConvergence {
+            what: "largest_generalized_eigenvalue (M⁻¹K underflows)",
+            iterations: 0,
+        });
+    };
     if res.converged {
         return Ok(theta);
     }
@@ -817,6 +829,27 @@ mod tests {
             let exact =
                 2.0 - 2.0 * (((j + 1) as f64) * std::f64::consts::PI / (n + 1) as f64).cos();
             assert!((v - exact).abs() < 1e-13, "{j}: {v} vs {exact}");
+        }
+    }
+
+    #[test]
+    fn largest_eigenvalue_with_huge_masses_is_an_error_or_a_number_never_a_panic() {
+        // A spring chain with masses of 1e308: M⁻¹K underflows to (nearly) zero.
+        let n = 5;
+        let k = SparseMatrix::from_dense(
+            &DenseMatrix::from_fn(n, n, |i, j| match i.abs_diff(j) {
+                0 => 2.0,
+                1 => -1.0,
+                _ => 0.0,
+            }),
+            0.0,
+        );
+        for mass in [1e300, 1e308, f64::MAX] {
+            let m = SparseMatrix::from_diagonal(&vec![mass; n]);
+            match largest_generalized_eigenvalue(&k, &m, 1e-12) {
+                Ok(l) => assert!(l.is_finite() && l >= 0.0 && l <= 4.0 / mass * 1.0001, "{l}"),
+                Err(e) => assert!(e.to_string().contains("underflow"), "{e}"),
+            }
         }
     }
 }

@@ -91,8 +91,8 @@ pub enum MsmError {
         /// The value.
         value: f64,
     },
-    /// A NaN or infinite input value.
-    #[error("{what} {index} is not finite ({value})")]
+    /// A NaN or infinite input value, or one beyond ±[`MAX_MAGNITUDE`](nurbspring_sim::MAX_MAGNITUDE).
+    #[error("{what} {index} is not a finite number of magnitude at most 1e30 ({value})")]
     NonFinite {
         /// What kind of value ("node position", "spring stiffness", …).
         what: &'static str,

@@ -149,7 +149,7 @@ impl MsmFile {
             }),
             Some(v) => {
                 for (a, x) in v.iter().enumerate() {
-                    if let Some(&bad) = x.iter().find(|c| !c.is_finite()) {
+                    if let Some(&bad) = x.iter().find(|c| !nurbspring_sim::representable(**c)) {
                         return Err(MsmError::NonFinite {
                             what: "initial velocity of node",
                             index: a,

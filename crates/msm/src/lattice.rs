@@ -3,6 +3,7 @@
 
 use nurbspring_geom::{KnotVector, NurbsCurve, NurbsSurface};
 use nurbspring_linalg::SparseMatrix;
+use nurbspring_sim::representable;
 
 use crate::element::grid_elements;
 use crate::spring::sub;
@@ -70,11 +71,11 @@ impl LatticeOptions {
     pub fn problems(&self) -> Vec<MsmError> {
         let mut out = Vec::new();
         let mut check = |name: &str, value: f64, ok: bool, rule: &'static str| {
-            if !value.is_finite() {
+            if !representable(value) {
                 out.push(MsmError::InvalidOption {
                     name: name.to_string(),
                     value,
-                    rule: "must be a finite number",
+                    rule: "must be a finite number of magnitude at most 1e30 (larger values overflow)",
                 });
             } else if !ok {
                 out.push(MsmError::InvalidOption {
@@ -380,7 +381,7 @@ impl SpringLattice {
             });
         }
         for (a, x) in self.positions.iter().enumerate() {
-            if let Some(&v) = x.iter().find(|v| !v.is_finite()) {
+            if let Some(&v) = x.iter().find(|v| !representable(**v)) {
                 return Err(MsmError::NonFinite {
                     what: "position of node",
                     index: a,
@@ -389,7 +390,7 @@ impl SpringLattice {
             }
         }
         for (a, &m) in self.masses.iter().enumerate() {
-            if m.is_nan() || m.is_infinite() {
+            if !representable(m) {
                 return Err(MsmError::NonFinite {
                     what: "mass of node",
                     index: a,
@@ -401,7 +402,7 @@ impl SpringLattice {
             }
         }
         for (a, &g) in self.damping.iter().enumerate() {
-            if !g.is_finite() {
+            if !representable(g) {
                 return Err(MsmError::NonFinite {
                     what: "damping of node",
                     index: a,
@@ -415,7 +416,7 @@ impl SpringLattice {
                 });
             }
         }
-        if let Some(&g) = self.gravity.iter().find(|g| !g.is_finite()) {
+        if let Some(&g) = self.gravity.iter().find(|g| !representable(**g)) {
             return Err(MsmError::NonFinite {
                 what: "gravity component",
                 index: 0,
@@ -432,7 +433,7 @@ impl SpringLattice {
                     });
                 }
             }
-            if !spring.k.is_finite() {
+            if !representable(spring.k) {
                 return Err(MsmError::NonFinite {
                     what: "stiffness of spring",
                     index: s,
@@ -445,7 +446,7 @@ impl SpringLattice {
                     k: spring.k,
                 });
             }
-            if !spring.rest_length.is_finite() {
+            if !representable(spring.rest_length) {
                 return Err(MsmError::NonFinite {
                     what: "rest length of spring",
                     index: s,
@@ -495,14 +496,14 @@ impl SpringLattice {
                     return Err(bad(format!("node {a} listed twice"), a as f64));
                 }
             }
-            if let Some(&c) = el.coefficients.iter().find(|c| !c.is_finite()) {
-                return Err(bad("coefficient (must be finite)".into(), c));
+            if let Some(&c) = el.coefficients.iter().find(|c| !representable(**c)) {
+                return Err(bad("coefficient (must be finite, |c| ≤ 1e30)".into(), c));
             }
-            if !(el.weight.is_finite() && el.weight > 0.0) {
-                return Err(bad("weight (must be finite and > 0)".into(), el.weight));
+            if !(representable(el.weight) && el.weight > 0.0) {
+                return Err(bad("weight (must be in (0, 1e30])".into(), el.weight));
             }
-            if !(el.k.is_finite() && el.k >= 0.0) {
-                return Err(bad("constant k (must be finite and ≥ 0)".into(), el.k));
+            if !(representable(el.k) && el.k >= 0.0) {
+                return Err(bad("constant k (must be in [0, 1e30])".into(), el.k));
             }
         }
         if !self.forces.is_empty() && self.forces.len() != n {
@@ -516,7 +517,7 @@ impl SpringLattice {
             .forces
             .iter()
             .enumerate()
-            .find_map(|(a, f)| f.iter().find(|x| !x.is_finite()).map(|v| (a, v)))
+            .find_map(|(a, f)| f.iter().find(|x| !representable(**x)).map(|v| (a, v)))
         {
             return Err(MsmError::NonFinite {
                 what: "force on node",

@@ -45,6 +45,17 @@ pub enum Error {
         /// The model's error.
         source: Box<DeriveError>,
     },
+    /// The job would need more memory or write more than its limits allow (refused before
+    /// anything is allocated; [`crate::resources`]).
+    #[error("{}: {key}: {message}", path.display())]
+    Resources {
+        /// The scene file.
+        path: PathBuf,
+        /// The key that sets the size.
+        key: String,
+        /// The estimate against the limit.
+        message: String,
+    },
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] OutputError),
@@ -57,7 +68,7 @@ impl Error {
     /// Input, Run or Cancelled.
     pub fn kind(&self) -> ErrorKind {
         match self {
-            Error::Scene(_) | Error::Option { .. } => ErrorKind::Input,
+            Error::Scene(_) | Error::Option { .. } | Error::Resources { .. } => ErrorKind::Input,
             Error::MsmFile { source, .. } => source.kind(),
             Error::Model { source, .. } => source.kind(),
             Error::Output(_) => ErrorKind::Run,

@@ -34,13 +34,14 @@ pub fn lattice_grid(lattice: &SpringLattice, x: &[f64]) -> VtkUnstructured {
         "rest_length",
         lattice.springs.iter().map(|s| s.rest_length).collect(),
     ));
+    // The elongation l − L, not the strain (l − L)/L: zero-rest-length springs have no strain.
     grid.cell_data.push(DataArray::scalars(
-        "strain",
+        "elongation",
         lattice
             .springs
             .iter()
             .zip(&lengths)
-            .map(|(s, l)| (l - s.rest_length) / s.rest_length)
+            .map(|(s, l)| l - s.rest_length)
             .collect(),
     ));
     grid.cell_data.push(DataArray::scalars(

@@ -40,6 +40,7 @@ pub mod markdown;
 pub mod msm_file;
 mod parse;
 pub mod report;
+pub mod resources;
 pub mod run;
 mod scene;
 mod scene_error;

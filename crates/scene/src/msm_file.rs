@@ -68,11 +68,20 @@ pub fn load_msm(
 /// Reads an msm.json file (a regular file of at most [`MAX_MSM_FILE_BYTES`]).
 pub fn read_msm_file(path: &Path, overrides: &MsmOverrides) -> Result<MsmSetup, Error> {
     let text = read_text(path, MAX_MSM_FILE_BYTES, "msm.json")?;
+    msm_setup_from_text(&text, path, overrides)
+}
+
+/// The MSM of msm.json text; `path` names it in messages.
+pub fn msm_setup_from_text(
+    text: &str,
+    path: &Path,
+    overrides: &MsmOverrides,
+) -> Result<MsmSetup, Error> {
     let bad = |source| Error::MsmFile {
         path: path.to_path_buf(),
         source: Box::new(source),
     };
-    let file = MsmFile::from_json_str(&text).map_err(bad)?;
+    let file = MsmFile::from_json_str(text).map_err(bad)?;
     let mut lattice = SpringLattice::from_file(&file).map_err(bad)?;
     lattice.set_constants(&overrides.constants);
     if let Some(m) = overrides.mass {

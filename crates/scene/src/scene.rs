@@ -186,7 +186,16 @@ pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, S
         path: path.to_path_buf(),
         problems: vec![Problem::new("(file)", value, message)],
     };
-    let file = std::fs::File::open(path).map_err(io)?;
+    // Opening a FIFO blocks until a writer appears: open without blocking, then check the kind
+    // through the handle.
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32);
+    }
+    let file = options.open(path).map_err(io)?;
     let meta = file.metadata().map_err(io)?;
     if !meta.is_file() {
         let kind = if meta.is_dir() {

@@ -1,6 +1,7 @@
 //! Validation of a deserialized scene: every value is checked and every problem reported with
 //! its key path and value.
 
+use nurbspring_sim::representable;
 use std::path::Path;
 
 use nurbspring_derive::Method;
@@ -53,12 +54,17 @@ impl Problems {
         self.0.len()
     }
 
-    /// Finite number; returns whether it is.
+    /// Finite number of magnitude at most [`nurbspring_sim::MAX_MAGNITUDE`] (larger values overflow the
+    /// assembly); returns whether it is.
     fn finite(&mut self, key: &str, v: f64) -> bool {
-        if v.is_finite() {
+        if representable(v) {
             true
         } else {
-            self.push(key, format_f64(v), "must be a finite number");
+            self.push(
+                key,
+                format_f64(v),
+                "must be a finite number of magnitude at most 1e30 (larger values overflow)",
+            );
             false
         }
     }

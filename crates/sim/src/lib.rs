@@ -32,6 +32,7 @@ pub use integrators::{NewtonSettings, Stepper, make_stepper, make_stepper_with_o
 pub use model::{DynamicModel, LinearModel, SystemMatrix};
 pub use nurbspring_linalg::{LinalgError, SparseMatrix};
 pub use run::{
-    IntegratorKind, MAX_STEPS, NullObserver, Observer, RunOptions, RunSummary, Sample,
-    StabilityLimit, State, check_time, simulate, stability_limit, step_count,
+    IntegratorKind, MAX_MAGNITUDE, MAX_STEPS, NullObserver, Observer, RunOptions, RunSummary,
+    Sample, StabilityLimit, State, check_time, representable, simulate, stability_limit,
+    step_count,
 };

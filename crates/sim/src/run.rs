@@ -11,6 +11,16 @@ use crate::{DynamicModel, SimError};
 /// Largest number of steps one run may take (10⁸): larger requests are refused up front.
 pub const MAX_STEPS: f64 = 1e8;
 
+/// Largest magnitude of any input number (10³⁰): matrices, energies and stability limits are
+/// products of a few inputs, so larger values could overflow to infinity; no physical scene in
+/// any unit system needs more.
+pub const MAX_MAGNITUDE: f64 = 1e30;
+
+/// Whether `x` is an acceptable input number: finite and at most [`MAX_MAGNITUDE`] in magnitude.
+pub fn representable(x: f64) -> bool {
+    x.is_finite() && x.abs() <= MAX_MAGNITUDE
+}
+
 /// The time integrators, each written once against [`DynamicModel`]. In files and on the
 /// command line they go by [`IntegratorKind::name`] (serde uses the same names).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]

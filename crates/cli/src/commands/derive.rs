@@ -8,7 +8,9 @@ use nurbspring_scene::report::{constants_text, write_derivation};
 use nurbspring_scene::{Error, Scene};
 
 use crate::progress::Progress;
-use crate::{CmdResult, Context, prepare_out_dir};
+use nurbspring_scene::resources::Job;
+
+use crate::{CmdResult, Context, commit_out_dir, stage_out_dir};
 
 /// Flags of `nurbspring derive`.
 #[derive(Args, Debug)]
@@ -40,8 +42,9 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
         Some(m) => (m, None),
         None => scene.derivation(),
     };
+    ctx.check_resources(&scene, Job::Derive(method), Some(&args.out))?;
     let config = scene.derivation_config(Some(method))?;
-    let out = prepare_out_dir(&args.out)?;
+    let staged = stage_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
     let cancel = Some(ctx.cancel.clone());
     let key = if args.derivation.is_some() {
@@ -63,7 +66,8 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     })?;
     bar.finish();
     let label = args.scene.display().to_string();
-    write_derivation(&out, &label, &scene, &derivation, None, "")?;
+    write_derivation(staged.path(), &label, &scene, &derivation, None, "")?;
+    let out = commit_out_dir(staged)?;
     if ctx.verbose() {
         let d = &derivation.derived;
         println!(

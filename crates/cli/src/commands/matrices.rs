@@ -6,7 +6,9 @@ use clap::Args;
 use nurbspring_scene::Scene;
 use nurbspring_scene::export::write_matrices;
 
-use crate::{CmdResult, Context, prepare_out_dir};
+use nurbspring_scene::resources::Job;
+
+use crate::{CmdResult, Context, commit_out_dir, stage_out_dir};
 
 /// Flags of `nurbspring matrices`.
 #[derive(Args, Debug)]
@@ -21,9 +23,11 @@ pub struct MatricesArgs {
 /// Assembles and writes M, D, K, f and the dof ordering.
 pub fn run(ctx: &Context, args: MatricesArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
+    ctx.check_resources(&scene, Job::Assemble, Some(&args.out))?;
     let model = scene.build_dnurbs()?;
-    let out = prepare_out_dir(&args.out)?;
-    write_matrices(&out, &model, &args.scene.display().to_string())?;
+    let staged = stage_out_dir(&args.out)?;
+    write_matrices(staged.path(), &model, &args.scene.display().to_string())?;
+    let out = commit_out_dir(staged)?;
     if ctx.verbose() {
         let k = &model.matrices().stiffness;
         println!(

@@ -19,11 +19,12 @@ pub struct ModesArgs {
 }
 
 /// Prints the lowest angular frequencies and periods as JSON.
-pub fn run(_ctx: &Context, args: ModesArgs) -> CmdResult {
+pub fn run(ctx: &Context, args: ModesArgs) -> CmdResult {
     if args.count == 0 {
         return Err(Error::option("--count", 0, "must be at least 1"));
     }
     let scene = Scene::from_path(&args.scene)?;
+    ctx.check_resources(&scene, nurbspring_scene::resources::Job::Factorize, None)?;
     let model = scene.build_dnurbs()?;
     let modes = model
         .modes(args.count)

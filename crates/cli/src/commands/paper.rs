@@ -8,7 +8,7 @@ use nurbspring_scene::markdown::verdict_table;
 use nurbspring_scene::report::write_derivation;
 
 use crate::progress::Progress;
-use crate::{CmdResult, Context, prepare_out_dir};
+use crate::{CmdResult, Context, commit_out_dir, stage_out_dir};
 
 /// Flags of `nurbspring paper`.
 #[derive(Args, Debug)]
@@ -22,7 +22,7 @@ pub struct PaperArgs {
 pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
     let scene = Scene::paper()?;
     let config = scene.derivation_config(Some(nurbspring_derive::Method::Paper))?;
-    let out = prepare_out_dir(&args.out)?;
+    let staged = stage_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
     let (derivation, report) =
         nurbspring_derive::paper::reproduce(&config, &mut |done, total| bar.update(done, total))
@@ -30,13 +30,14 @@ pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
     bar.finish();
     let table = verdict_table(&report);
     write_derivation(
-        &out,
+        staged.path(),
         "built-in paper scene (examples/paper.toml)",
         &scene,
         &derivation,
         Some(&report),
         &table,
     )?;
+    let out = commit_out_dir(staged)?;
     println!("{table}");
     println!("Outputs in {}", out.display());
     Ok(())

@@ -4,14 +4,15 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 
 use clap::{Args, ValueEnum};
-use nurbspring_scene::msm_file::load_msm;
 use nurbspring_scene::run::{RunRequest, simulate_dnurbs, simulate_msm, write_run};
 use nurbspring_scene::{Error, Scene};
 use nurbspring_sim::IntegratorKind;
 
 use crate::commands::{MsmFlags, flag, parse_integrator};
 use crate::progress::Progress;
-use crate::{CmdResult, Context, prepare_out_dir};
+use nurbspring_scene::resources::{Job, Timing};
+
+use crate::{CmdResult, Context, commit_out_dir, stage_out_dir};
 
 /// Which model to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -59,17 +60,28 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
         force_unstable: args.force_unstable,
         cancel: Some(ctx.cancel.clone()),
     };
+    let timing = Timing {
+        dt: args.dt,
+        t_end: args.t_end,
+    };
     let bar = Progress::new(ctx.global.quiet, "", 1);
     let mut progress = |step: usize, steps: usize| bar.update(step, steps);
-    let (out, simulated, outcome, pvd, what) = match args.model {
+    let (staged, simulated, outcome, pvd, what) = match args.model {
         ModelKind::Dnurbs => {
             let scene = Scene::from_path(&args.scene)?;
-            let out = prepare_out_dir(&args.out)?;
-            let (sim, outcome) = simulate_dnurbs(&scene, &request, Some(&out), &mut progress)?;
-            (out, sim, outcome, "surface.pvd", "D-NURBS")
+            ctx.check_resources(&scene, Job::SimulateDnurbs(timing), Some(&args.out))?;
+            let staged = stage_out_dir(&args.out)?;
+            let (sim, outcome) =
+                simulate_dnurbs(&scene, &request, Some(staged.path()), &mut progress)?;
+            (staged, sim, outcome, "surface.pvd", "D-NURBS")
         }
         ModelKind::Msm => {
-            let setup = load_msm(&args.scene, &args.overrides.overrides(), &flag)?;
+            let setup = ctx.load_msm(
+                &args.scene,
+                &args.overrides.overrides(),
+                &flag,
+                Some((&args.out, timing)),
+            )?;
             let s = setup
                 .model
                 .stability()
@@ -86,21 +98,26 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
                     ""
                 }
             );
-            let out = prepare_out_dir(&args.out)?;
-            let (sim, outcome) = simulate_msm(&setup, &request, Some(&out), &mut progress)?;
-            (out, sim, outcome, "lattice.pvd", "MSM")
+            let staged = stage_out_dir(&args.out)?;
+            let (sim, outcome) =
+                simulate_msm(&setup, &request, Some(staged.path()), &mut progress)?;
+            (staged, sim, outcome, "lattice.pvd", "MSM")
         }
     };
     bar.finish();
-    write_run(&out, &simulated, pvd)?;
+    // A failed run leaves the previous one in place (the staged folder is dropped).
     outcome?;
+    write_run(staged.path(), &simulated, pvd)?;
     if ctx.cancel.load(Ordering::Relaxed) {
+        let kept = staged.keep_interrupted().map_err(Error::Output)?;
         eprintln!(
-            "interrupted; the samples computed so far are in {}",
-            out.display()
+            "interrupted: {} is as it was; the samples computed so far are in {}",
+            args.out.display(),
+            kept.display()
         );
         return Err(Error::Cancelled);
     }
+    let out = commit_out_dir(staged)?;
     if ctx.verbose() {
         println!(
             "{what} run ({}) written to {}",

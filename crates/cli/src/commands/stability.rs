@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use clap::Args;
 use nurbspring_scene::Error;
-use nurbspring_scene::msm_file::load_msm;
 use serde_json::json;
 
 use crate::commands::{MsmFlags, flag};
@@ -20,8 +19,8 @@ pub struct StabilityArgs {
 }
 
 /// Prints `{"omega_max": …, "dt_critical": …}`.
-pub fn run(_ctx: &Context, args: StabilityArgs) -> CmdResult {
-    let setup = load_msm(&args.scene, &args.overrides.overrides(), &flag)?;
+pub fn run(ctx: &Context, args: StabilityArgs) -> CmdResult {
+    let setup = ctx.load_msm(&args.scene, &args.overrides.overrides(), &flag, None)?;
     let s = setup
         .model
         .stability()

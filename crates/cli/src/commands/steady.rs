@@ -9,7 +9,7 @@ use nurbspring_scene::export::write_steady;
 use nurbspring_scene::{Error, Scene};
 use serde_json::json;
 
-use crate::{CmdResult, Context, prepare_out_dir, print_json};
+use crate::{CmdResult, Context, commit_out_dir, print_json, stage_out_dir};
 
 /// Flags of `nurbspring steady`.
 #[derive(Args, Debug)]
@@ -22,8 +22,13 @@ pub struct SteadyArgs {
 }
 
 /// Solves `K (p − p_rest) = f` on the free dofs and prints the probes' displacements as JSON.
-pub fn run(_ctx: &Context, args: SteadyArgs) -> CmdResult {
+pub fn run(ctx: &Context, args: SteadyArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
+    ctx.check_resources(
+        &scene,
+        nurbspring_scene::resources::Job::Factorize,
+        args.out.as_deref(),
+    )?;
     let model = scene.build_dnurbs()?;
     let p = model
         .steady_state()
@@ -41,8 +46,9 @@ pub fn run(_ctx: &Context, args: SteadyArgs) -> CmdResult {
         })
         .collect();
     if let Some(dir) = &args.out {
-        let out = prepare_out_dir(dir)?;
-        write_steady(&out, &model, &p)?;
+        let staged = stage_out_dir(dir)?;
+        write_steady(staged.path(), &model, &p)?;
+        commit_out_dir(staged)?;
     }
     print_json(&json!({"probes": points}))
 }

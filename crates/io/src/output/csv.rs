@@ -37,7 +37,8 @@ fn quote(field: &str) -> String {
 
 /// Writes a CSV file: one header line, then one line per row, numbers formatted with
 /// [`format_f64`] (exact round trip). Every row must have as many values as the header has
-/// names; otherwise nothing is written and the error names the row.
+/// names, and every value finite (NaN and infinities are refused, naming the row and column);
+/// otherwise nothing is written and the error names the row.
 ///
 /// ```
 /// # let dir = tempfile::tempdir().unwrap();
@@ -50,10 +51,22 @@ pub fn write_csv<I>(path: impl AsRef<Path>, header: &[&str], rows: I) -> Result<
 where
     I: IntoIterator<Item = Vec<f64>>,
 {
-    let rows = rows
-        .into_iter()
-        .map(|r| r.into_iter().map(format_f64).collect::<Vec<_>>());
-    write_csv_text(path, header, rows)
+    let path = path.as_ref();
+    let mut text_rows = Vec::new();
+    for (i, r) in rows.into_iter().enumerate() {
+        if let Some((c, x)) = r.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(OutputError::invalid(
+                path,
+                format!(
+                    "row {i}, column {:?} is {}: non-finite values are never written",
+                    header.get(c).copied().unwrap_or("?"),
+                    format_f64(*x)
+                ),
+            ));
+        }
+        text_rows.push(r.into_iter().map(format_f64).collect::<Vec<_>>());
+    }
+    write_csv_text(path, header, text_rows)
 }
 
 /// Writes a CSV file whose fields are already text (for tables mixing names and numbers; use
@@ -127,8 +140,8 @@ mod tests {
         let p = dir.path().join("v.csv");
         let rows = vec![
             vec![0.1, 1.0 / 3.0, -0.0],
-            vec![1e-310, f64::MAX, f64::NAN],
-            vec![f64::INFINITY, 2.7225, 0.8661],
+            vec![1e-310, f64::MAX, f64::MIN_POSITIVE],
+            vec![-f64::MAX, 2.7225, 0.8661],
         ];
         write_csv(&p, &["a", "b", "c"], rows.clone()).unwrap();
         let text = std::fs::read_to_string(&p).unwrap();
@@ -152,6 +165,17 @@ mod tests {
         let err = write_csv(&p, &["t", "z"], vec![vec![0.0, 1.0], vec![1.0]]).unwrap_err();
         assert!(err.to_string().contains("row 1 has 1 values"), "{err}");
         assert!(!p.exists());
+    }
+
+    #[test]
+    fn non_finite_values_are_refused_naming_row_and_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("nan.csv");
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let err = write_csv(&p, &["t", "z"], vec![vec![0.0, 1.0], vec![1.0, bad]]).unwrap_err();
+            assert!(err.to_string().contains("row 1, column \"z\""), "{err}");
+            assert!(!p.exists());
+        }
     }
 
     #[test]

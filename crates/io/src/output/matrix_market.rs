@@ -45,6 +45,8 @@ pub fn write_matrix_market(
     a: &SparseMatrix,
     comment: &str,
 ) -> Result<(), OutputError> {
+    let path = path.as_ref();
+    check_finite(path, a.triplets().map(|(i, j, v)| ((i, j), v)))?;
     write_atomic(path, |w| {
         writeln!(w, "%%MatrixMarket matrix coordinate real general")?;
         write_comment(w, comment)?;
@@ -76,6 +78,7 @@ pub fn write_matrix_market_symmetric(
             ),
         ));
     }
+    check_finite(path, a.triplets().map(|(i, j, v)| ((i, j), v)))?;
     let scale = a.triplets().fold(0.0_f64, |m, (_, _, v)| m.max(v.abs()));
     let mut worst: Option<(usize, usize, f64, f64)> = None;
     let mut worst_diff = SYMMETRY_TOLERANCE * scale;
@@ -131,6 +134,13 @@ pub fn write_matrix_market_array(
             ),
         ));
     }
+    check_finite(
+        path,
+        column_major
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| ((k % nrows.max(1), k / nrows.max(1)), v)),
+    )?;
     write_atomic(path, |w| {
         writeln!(w, "%%MatrixMarket matrix array real general")?;
         write_comment(w, comment)?;
@@ -149,6 +159,26 @@ pub fn write_matrix_market_vector(
     comment: &str,
 ) -> Result<(), OutputError> {
     write_matrix_market_array(path, x.len(), 1, x, comment)
+}
+
+/// Refuses (naming the 1-based entry) a NaN or infinite value: never written to a file.
+fn check_finite(
+    path: &Path,
+    entries: impl Iterator<Item = ((usize, usize), f64)>,
+) -> Result<(), OutputError> {
+    for ((i, j), v) in entries {
+        if !v.is_finite() {
+            return Err(OutputError::invalid(
+                path,
+                format!(
+                    "entry ({}, {}) is {v}: non-finite values are never written",
+                    i + 1,
+                    j + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// What the banner line says.
