@@ -300,8 +300,12 @@ pub fn sofa_scene(setup: &MsmSetup, source: &str) -> Result<String, String> {
     let _ = writeln!(s, "MASSES = {}\n", py_floats(&lattice.masses));
     let _ = writeln!(
         s,
-        "FIXED = {}\n",
-        py_floats(&fixed.iter().map(|&a| a as f64).collect::<Vec<_>>()).replace(".0", "")
+        "FIXED = [{}]\n",
+        fixed
+            .iter()
+            .map(usize::to_string)
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     if !lattice.forces.is_empty() {
         let _ = writeln!(s, "FORCES = {}\n", py_list3(&lattice.forces));
