@@ -393,20 +393,27 @@ pub fn imported_scene(geometry: &GeometrySpec, origin: &str, source: &GeometrySo
     let surface = geometry.is_surface();
     let (n_u, n_v) = geometry.net_dims();
     let mut t = String::new();
+    let shape = if surface {
+        format!("surface ({n_u} x {n_v} control points)")
+    } else {
+        format!("curve ({n_u} control points)")
+    };
+    t.push_str(&format!("# Imported by `nurbspring import` from {origin}.\n"));
+    t.push_str(&match source {
+        GeometrySource::Inline => format!("# The NURBS {shape} is written out below.\n"),
+        GeometrySource::Link { .. } => {
+            format!("# The NURBS {shape} is read from its file when the scene is loaded.\n")
+        }
+    });
     t.push_str(&format!(
-        "# Imported by `nurbspring import` from {origin}.\n\
-         # A {}{} with its outer ring of control points fixed, sagging under\n\
-         # gravity. Every table below the geometry holds defaults to edit (docs/scenes.md lists\n\
-         # every key). Coordinates are as the file wrote them (IGES files are often in mm): choose\n\
-         # mu, the stiffnesses and gravity in the same units.\n\n",
+        "# The tables after the geometry hold defaults to edit: the {} fixed,\n\
+         # gravity, material, time stepping, lattice and fit (docs/scenes.md lists every key).\n\
+         # Coordinates are as the file wrote them (IGES files are often in mm): choose mu, the\n\
+         # stiffnesses and gravity in the same units.\n\n",
         if surface {
-            format!("NURBS surface with {n_u} x {n_v} control points")
+            "outer ring of control points"
         } else {
-            format!("NURBS curve with {n_u} control points")
-        },
-        match source {
-            GeometrySource::Inline => String::new(),
-            GeometrySource::Link { .. } => " read from its file".to_string(),
+            "end control points"
         }
     ));
     match source {

@@ -86,9 +86,11 @@ fn relative_to_scene(file: &Path, scene: &Path) -> String {
     let (Some(file_abs), Some(dir_abs)) = (absolute(file), absolute(dir)) else {
         return file.display().to_string();
     };
-    let normal = |p: &Path| -> Vec<Component<'_>> {
-        p.components().filter(|c| !matches!(c, Component::CurDir)).collect()
-    };
+    fn normal(p: &Path) -> Vec<Component<'_>> {
+        p.components()
+            .filter(|c| !matches!(c, Component::CurDir))
+            .collect()
+    }
     let (f, d) = (normal(&file_abs), normal(&dir_abs));
     if f.iter().chain(&d).any(|c| matches!(c, Component::ParentDir)) {
         return file_abs.display().to_string();
