@@ -63,10 +63,7 @@ fn curve_gap(a: &NurbsCurve, b: &NurbsCurve, n: usize) -> f64 {
 }
 
 fn net_scale(points: &[[f64; 3]]) -> f64 {
-    points
-        .iter()
-        .flatten()
-        .fold(1.0_f64, |m, x| m.max(x.abs()))
+    points.iter().flatten().fold(1.0_f64, |m, x| m.max(x.abs()))
 }
 
 /// `import` of an Open CASCADE IGES file writes a scene that loads, checks and holds the file's
@@ -88,7 +85,10 @@ fn import_iges_inline_and_linked() {
         .assert()
         .success();
     let text = std::fs::read_to_string(&inline).unwrap();
-    assert!(text.starts_with("# Imported by `nurbspring import`"), "{text}");
+    assert!(
+        text.starts_with("# Imported by `nurbspring import`"),
+        "{text}"
+    );
     assert!(text.contains("[material]") && text.contains("[constraints]"));
     let scene = Scene::from_path(&inline).unwrap();
     assert_eq!(scene.to_surface().unwrap(), expected);
@@ -252,7 +252,10 @@ fn tessellated_obj_has_normals_and_uvs() {
     assert_eq!(count("vt "), 81);
     assert_eq!(count("vn "), 81);
     assert_eq!(count("f "), 64);
-    assert!(text.contains("\nf 1/1/1 10/10/10 11/11/11 2/2/2\n"), "{text}");
+    assert!(
+        text.contains("\nf 1/1/1 10/10/10 11/11/11 2/2/2\n"),
+        "{text}"
+    );
     for l in text.lines().filter(|l| l.starts_with("vn ")) {
         let n: Vec<f64> = l[3..].split(' ').map(|x| x.parse().unwrap()).collect();
         let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
@@ -280,11 +283,25 @@ fn refine_keeps_the_geometry() {
     for (scene, args) in [
         (
             examples().join("paper.toml"),
-            vec!["--elevate", "4,5", "--insert-u", "0.1,0.6,0.6", "--insert-v", "0.3"],
+            vec![
+                "--elevate",
+                "4,5",
+                "--insert-u",
+                "0.1,0.6,0.6",
+                "--insert-v",
+                "0.3",
+            ],
         ),
         (
             half_path.clone(),
-            vec!["--insert-u", "0.25,0.75", "--insert-v", "0.1,0.9", "--elevate", "3,3"],
+            vec![
+                "--insert-u",
+                "0.25,0.75",
+                "--insert-v",
+                "0.1,0.9",
+                "--elevate",
+                "3,3",
+            ],
         ),
     ] {
         let out = dir.path().join("fine.toml");
@@ -302,7 +319,11 @@ fn refine_keeps_the_geometry() {
         assert!(fine.n_control_points() > coarse.n_control_points());
         let gap = surface_gap(&coarse, &fine, 41);
         let scale = net_scale(coarse.control_points());
-        assert!(gap <= 1e-13 * scale, "{}: moved by {gap:e}", scene.display());
+        assert!(
+            gap <= 1e-13 * scale,
+            "{}: moved by {gap:e}",
+            scene.display()
+        );
         bin().arg("check").arg(&out).assert().success();
     }
     // The paper's surface raised to degrees (4, 5).
@@ -346,7 +367,11 @@ fn refine_keeps_the_geometry() {
             vec!["--insert-u", "0.5"],
             "constraints.fixed",
         ),
-        (examples().join("string.toml"), vec!["--insert-u", "0.5"], "initial.velocities"),
+        (
+            examples().join("string.toml"),
+            vec!["--insert-u", "0.5"],
+            "initial.velocities",
+        ),
         (curve.clone(), vec![], "nothing to do"),
     ] {
         let a = bin()
@@ -421,7 +446,10 @@ fn bad_geometry_files_exit_2_naming_file_and_line() {
     short[p_start] = cut;
     let err = import("short.igs", &(short.join("\n") + "\n"));
     assert!(err.contains(&format!("line {}", p_start + 1)), "{err}");
-    let err = import("broken.json", "{\"shape\": {\"type\": \"surface\",\n \"data\": [}}");
+    let err = import(
+        "broken.json",
+        "{\"shape\": {\"type\": \"surface\",\n \"data\": [}}",
+    );
     assert!(err.contains("line 2"), "{err}");
     let err = import("broken.obj", "v 0 0 0\nv 1 0 0\ncstype bspline\ndeg x\n");
     assert!(err.contains("line 4"), "{err}");
@@ -511,7 +539,8 @@ fn small_msm(dir: &Path, with_elements: bool, with_springs: bool) -> PathBuf {
                     springs.push(serde_json::json!({"a": idx(i, j), "b": idx(i + 1, j), "k": 20.0, "rest_length": 0.45}));
                 }
                 if j + 1 < n_v {
-                    springs.push(serde_json::json!({"a": idx(i, j), "b": idx(i, j + 1), "k": 15.0}));
+                    springs
+                        .push(serde_json::json!({"a": idx(i, j), "b": idx(i, j + 1), "k": 15.0}));
                 }
                 if i + 1 < n_u && j + 1 < n_v {
                     springs.push(serde_json::json!({"a": idx(i, j), "b": idx(i + 1, j + 1), "kind": "shear", "k": 5.0}));
@@ -521,14 +550,20 @@ fn small_msm(dir: &Path, with_elements: bool, with_springs: bool) -> PathBuf {
     }
     let mut elements = Vec::new();
     if with_elements {
-        elements.push(serde_json::json!({"kind": "spring_u", "class": "spring_u@interior",
-            "nodes": [idx(1, 1), idx(2, 1)], "k": 3.0, "weight": 0.8, "coefficients": [1.0, -1.0]}));
-        elements.push(serde_json::json!({"kind": "bend_u", "class": "bend_u@boundary",
+        elements.push(
+            serde_json::json!({"kind": "spring_u", "class": "spring_u@interior",
+            "nodes": [idx(1, 1), idx(2, 1)], "k": 3.0, "weight": 0.8, "coefficients": [1.0, -1.0]}),
+        );
+        elements.push(
+            serde_json::json!({"kind": "bend_u", "class": "bend_u@boundary",
             "nodes": [idx(0, 2), idx(1, 2), idx(2, 2)], "k": 0.5, "weight": 0.2,
-            "coefficients": [4.0, -8.0, 4.0]}));
-        elements.push(serde_json::json!({"kind": "twist", "class": "twist@interior",
+            "coefficients": [4.0, -8.0, 4.0]}),
+        );
+        elements.push(
+            serde_json::json!({"kind": "twist", "class": "twist@interior",
             "nodes": [idx(1, 0), idx(2, 0), idx(1, 1), idx(2, 1)], "k": 0.2, "weight": 0.2,
-            "coefficients": [5.0, -5.0, -5.0, 5.0]}));
+            "coefficients": [5.0, -5.0, -5.0, 5.0]}),
+        );
     }
     let velocities: Vec<[f64; 3]> = (0..n_u * n_v)
         .map(|a| [0.0, 0.01 * a as f64, -0.05])
@@ -591,10 +626,7 @@ fn assert_same_trajectory(ours: &Path, theirs: &Path) {
     assert_eq!(h1, h2);
     assert_eq!(a.len(), b.len());
     assert!(a.len() > 10);
-    let scale = a
-        .iter()
-        .flatten()
-        .fold(1.0_f64, |m, x| m.max(x.abs()));
+    let scale = a.iter().flatten().fold(1.0_f64, |m, x| m.max(x.abs()));
     let mut worst = 0.0_f64;
     for (r, s) in a.iter().zip(&b) {
         assert_eq!(r.len(), s.len());
@@ -631,12 +663,9 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
         .arg(&derived)
         .assert()
         .success();
-    for (k, model) in [
-        small_msm(dir.path(), true, true),
-        derived.join("msm.json"),
-    ]
-    .iter()
-    .enumerate()
+    for (k, model) in [small_msm(dir.path(), true, true), derived.join("msm.json")]
+        .iter()
+        .enumerate()
     {
         let npz = dir.path().join(format!("model{k}.npz"));
         bin()
@@ -650,7 +679,13 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
         bin()
             .arg("simulate")
             .arg(model)
-            .args(["--model", "msm", "--integrator", "symplectic-euler", "--out"])
+            .args([
+                "--model",
+                "msm",
+                "--integrator",
+                "symplectic-euler",
+                "--out",
+            ])
             .arg(&run)
             .assert()
             .success();
@@ -685,7 +720,12 @@ fn npz_export_holds_the_model() {
         .success();
     let bytes = std::fs::read(&npz).unwrap();
     assert_eq!(&bytes[..4], b"PK\x03\x04");
-    for name in ["positions.npy", "springs.npy", "element_nodes.npy", "probe_nodes.npy"] {
+    for name in [
+        "positions.npy",
+        "springs.npy",
+        "element_nodes.npy",
+        "probe_nodes.npy",
+    ] {
         assert!(
             bytes.windows(name.len()).any(|w| w == name.as_bytes()),
             "{name}"

@@ -246,9 +246,7 @@ pub fn write_geometry_file(
     shapes: &[Shape],
 ) -> Result<(), Error> {
     let text = match format {
-        GeometryFormat::GeomdlJson => {
-            geomdl::write(shapes).map_err(|e| exchange_error(path, e))?
-        }
+        GeometryFormat::GeomdlJson => geomdl::write(shapes).map_err(|e| exchange_error(path, e))?,
         GeometryFormat::Iges => iges::write(shapes),
         GeometryFormat::ObjFreeForm => obj::write(shapes),
     };
@@ -398,7 +396,9 @@ pub fn imported_scene(geometry: &GeometrySpec, origin: &str, source: &GeometrySo
     } else {
         format!("curve ({n_u} control points)")
     };
-    t.push_str(&format!("# Imported by `nurbspring import` from {origin}.\n"));
+    t.push_str(&format!(
+        "# Imported by `nurbspring import` from {origin}.\n"
+    ));
     t.push_str(&match source {
         GeometrySource::Inline => format!("# The NURBS {shape} is written out below.\n"),
         GeometrySource::Link { .. } => {
@@ -511,12 +511,7 @@ pub fn refine_scene(scene: &Scene, r: &Refinement) -> Result<Scene, Error> {
             }));
         }
     }
-    let fmt_knots = |v: &[f64]| {
-        v.iter()
-            .map(|&x| num(x))
-            .collect::<Vec<_>>()
-            .join(",")
-    };
+    let fmt_knots = |v: &[f64]| v.iter().map(|&x| num(x)).collect::<Vec<_>>().join(",");
     let geometry = match &scene.geometry {
         GeometrySpec::Surface(_) => {
             let mut s = scene.to_surface()?;

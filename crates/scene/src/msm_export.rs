@@ -127,13 +127,7 @@ pub fn npz_arrays(setup: &MsmSetup) -> Vec<(&'static str, NpyArray)> {
         ),
         (
             "element_class",
-            NpyArray::strings(
-                lattice
-                    .elements
-                    .iter()
-                    .map(|e| e.class().name())
-                    .collect(),
-            ),
+            NpyArray::strings(lattice.elements.iter().map(|e| e.class().name()).collect()),
         ),
         ("dt", NpyArray::scalar(setup.run.dt)),
         ("t_end", NpyArray::scalar(setup.run.t_end)),

@@ -39,7 +39,14 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
     ),
     (
         "curve",
-        &["file", "index", "degree", "knots", "control_points", "weights"],
+        &[
+            "file",
+            "index",
+            "degree",
+            "knots",
+            "control_points",
+            "weights",
+        ],
     ),
     (
         "material",

@@ -640,10 +640,18 @@ impl<'de> Deserialize<'de> for RawGeometry<RawSurface> {
             return Ok(g);
         }
         Ok(RawGeometry::Inline(RawSurface {
-            degree_u: t.degree_u.ok_or_else(|| de::Error::missing_field("degree_u"))?,
-            degree_v: t.degree_v.ok_or_else(|| de::Error::missing_field("degree_v"))?,
-            knots_u: t.knots_u.ok_or_else(|| de::Error::missing_field("knots_u"))?,
-            knots_v: t.knots_v.ok_or_else(|| de::Error::missing_field("knots_v"))?,
+            degree_u: t
+                .degree_u
+                .ok_or_else(|| de::Error::missing_field("degree_u"))?,
+            degree_v: t
+                .degree_v
+                .ok_or_else(|| de::Error::missing_field("degree_v"))?,
+            knots_u: t
+                .knots_u
+                .ok_or_else(|| de::Error::missing_field("knots_u"))?,
+            knots_v: t
+                .knots_v
+                .ok_or_else(|| de::Error::missing_field("knots_v"))?,
             control_points: t
                 .control_points
                 .ok_or_else(|| de::Error::missing_field("control_points"))?,

@@ -33,7 +33,11 @@ pub fn run(ctx: &Context, args: ImportArgs) -> CmdResult {
     let file = read_geometry_file(&args.file)?;
     let surface = !args.curve && file.shapes.iter().any(|s| s.as_surface().is_some());
     let shape = file.select(surface, args.index).map_err(|m| {
-        Error::option("--index", args.index, format!("{}: {m}", args.file.display()))
+        Error::option(
+            "--index",
+            args.index,
+            format!("{}: {m}", args.file.display()),
+        )
     })?;
     let geometry = GeometrySpec::from_shape(shape);
     let source = if args.link {
@@ -82,7 +86,10 @@ pub fn run(ctx: &Context, args: ImportArgs) -> CmdResult {
 /// when both can be resolved, else absolute.
 fn relative_to_scene(file: &Path, scene: &Path) -> String {
     let absolute = |p: &Path| std::path::absolute(p).ok();
-    let dir = scene.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = scene
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     let (Some(file_abs), Some(dir_abs)) = (absolute(file), absolute(dir)) else {
         return file.display().to_string();
     };
@@ -92,7 +99,10 @@ fn relative_to_scene(file: &Path, scene: &Path) -> String {
             .collect()
     }
     let (f, d) = (normal(&file_abs), normal(&dir_abs));
-    if f.iter().chain(&d).any(|c| matches!(c, Component::ParentDir)) {
+    if f.iter()
+        .chain(&d)
+        .any(|c| matches!(c, Component::ParentDir))
+    {
         return file_abs.display().to_string();
     }
     let common = f.iter().zip(&d).take_while(|(a, b)| a == b).count();

@@ -15,10 +15,20 @@ pub struct RefineArgs {
     /// Scene file (TOML).
     scene: PathBuf,
     /// Knots to insert along u, comma-separated (repeat a value to insert it more than once).
-    #[arg(long, value_name = "U,…", value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "U,…",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
     insert_u: Vec<f64>,
     /// Knots to insert along v (surfaces).
-    #[arg(long, value_name = "V,…", value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "V,…",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
     insert_v: Vec<f64>,
     /// Raise the degrees to P along u and Q along v (a curve: P); done before the insertions.
     #[arg(long, value_name = "P,Q")]
@@ -29,7 +39,13 @@ pub struct RefineArgs {
 }
 
 fn parse_degrees(s: &str) -> Result<(usize, Option<usize>), Error> {
-    let bad = || Error::option("--elevate", s, "expected P,Q (a surface) or P (a curve): degrees ≥ 1");
+    let bad = || {
+        Error::option(
+            "--elevate",
+            s,
+            "expected P,Q (a surface) or P (a curve): degrees ≥ 1",
+        )
+    };
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let degree = |p: &str| p.parse::<usize>().ok().filter(|&d| d >= 1).ok_or_else(bad);
     match parts.as_slice() {
@@ -49,7 +65,11 @@ fn describe(g: &GeometrySpec) -> String {
             s.degree_v
         ),
         GeometrySpec::Curve(c) => {
-            format!("{} control points, degree {}", c.control_points.len(), c.degree)
+            format!(
+                "{} control points, degree {}",
+                c.control_points.len(),
+                c.degree
+            )
         }
     }
 }
@@ -74,15 +94,18 @@ pub fn run(ctx: &Context, args: RefineArgs) -> CmdResult {
     if let Some(e) = &args.elevate {
         ops.push(format!("--elevate {e}"));
     }
-    for (name, v) in [("--insert-u", &args.insert_u), ("--insert-v", &args.insert_v)] {
+    for (name, v) in [
+        ("--insert-u", &args.insert_u),
+        ("--insert-v", &args.insert_v),
+    ] {
         if !v.is_empty() {
             let list: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
             ops.push(format!("{name} {}", list.join(",")));
         }
     }
     let text = format!(
-        "# Refined by `nurbspring refine` from {} ({}): the same {} on a finer net\n\
-         # ({} before, {} now), so it evaluates to the same points up to round-off.\n\n{}",
+        "# Refined by `nurbspring refine` from {}\n# ({}): the same {} on a finer net,\n\
+         # evaluating to the same points up to round-off.\n# Before: {}.\n# Now: {}.\n\n{}",
         args.scene.display(),
         ops.join(" "),
         scene.geometry.section(),

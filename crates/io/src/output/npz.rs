@@ -117,7 +117,12 @@ impl NpyArray {
             ));
         }
         let width = match &self.data {
-            NpyData::Str(v) => v.iter().map(|s| s.chars().count()).max().unwrap_or(0).max(1),
+            NpyData::Str(v) => v
+                .iter()
+                .map(|s| s.chars().count())
+                .max()
+                .unwrap_or(0)
+                .max(1),
             _ => 0,
         };
         let descr = match &self.data {
@@ -149,8 +154,12 @@ impl NpyArray {
         out.extend_from_slice(&header_len.to_le_bytes());
         out.extend_from_slice(header.as_bytes());
         match &self.data {
-            NpyData::F64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-            NpyData::I64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            NpyData::F64(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            NpyData::I64(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
             NpyData::Bool(v) => out.extend(v.iter().map(|&b| u8::from(b))),
             NpyData::Str(v) => {
                 for s in v {
@@ -291,9 +300,15 @@ mod tests {
         assert!(header.ends_with('\n'));
         assert_eq!(b.len(), 10 + len + 24);
         assert_eq!(&b[10 + len..10 + len + 8], &1.0f64.to_le_bytes());
-        let s = NpyArray::strings(vec!["ab".into(), "c".into()]).to_npy().unwrap();
+        let s = NpyArray::strings(vec!["ab".into(), "c".into()])
+            .to_npy()
+            .unwrap();
         let len = u16::from_le_bytes([s[8], s[9]]) as usize;
-        assert!(std::str::from_utf8(&s[10..10 + len]).unwrap().contains("'<U2'"));
+        assert!(
+            std::str::from_utf8(&s[10..10 + len])
+                .unwrap()
+                .contains("'<U2'")
+        );
         assert_eq!(&s[10 + len..], b"a\0\0\0b\0\0\0c\0\0\0\0\0\0\0");
         let scalar = NpyArray::scalar(0.5).to_npy().unwrap();
         assert!(String::from_utf8_lossy(&scalar).contains("'shape': ()"));

@@ -64,9 +64,14 @@ impl ObjMesh {
     /// Checks that every index refers to a vertex and every face has at least 3 corners.
     fn check(&self) -> Result<(), String> {
         let n = self.vertices.len();
-        for (what, len) in [("texture coordinates", self.uvs.len()), ("normals", self.normals.len())] {
+        for (what, len) in [
+            ("texture coordinates", self.uvs.len()),
+            ("normals", self.normals.len()),
+        ] {
             if len != 0 && len != n {
-                return Err(format!("{len} {what} for {n} vertices (one per vertex or none)"));
+                return Err(format!(
+                    "{len} {what} for {n} vertices (one per vertex or none)"
+                ));
             }
         }
         for (f, face) in self.faces.iter().enumerate() {
