@@ -596,3 +596,31 @@ pub fn refine_scene(scene: &Scene, r: &Refinement) -> Result<Scene, Error> {
     // Validate the whole scene again: lattice and probe keys may not fit the new net.
     Ok(Scene::from_str(&refined.to_toml(), &scene.path)?)
 }
+
+/// Writes a polyline of `n` points uniformly spaced in the parameter of a curve as OBJ `l`
+/// records.
+pub fn write_tessellated_curve_obj(
+    path: &Path,
+    curve: &NurbsCurve,
+    n: usize,
+    comment: &str,
+) -> Result<(), Error> {
+    let (a, b) = curve.domain();
+    let points = nurbspring_geom::linspace(a, b, n)
+        .into_iter()
+        .map(|u| curve.point(u))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| {
+            Error::Output(nurbspring_io::OutputError::InvalidData {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })
+        })?;
+    let lines = (1..points.len()).map(|i| [i - 1, i]).collect();
+    Ok(write_obj(path, &ObjMesh::lattice(points, lines), comment)?)
+}
+
+/// Writes a scene (or any text file) atomically.
+pub fn write_text_file(path: &Path, text: &str) -> Result<(), Error> {
+    Ok(write_atomic_bytes(path, text.as_bytes())?)
+}

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use nurbspring_exchange::Shape;
-use nurbspring_scene::geometry_file::{GeometryFormat, write_geometry_file, write_tessellated_obj};
+use nurbspring_scene::geometry_file::{
+    GeometryFormat, write_geometry_file, write_tessellated_curve_obj, write_tessellated_obj,
+};
 use nurbspring_scene::msm_export::{write_msm_npz, write_msm_sofa};
 use nurbspring_scene::msm_file::{is_msm_file, load_msm};
 use nurbspring_scene::{Error, Scene};
@@ -89,7 +91,12 @@ pub fn run(ctx: &Context, args: ExportArgs) -> CmdResult {
                     format!("tessellated surface ({n} x {n} vertices with normals and UVs)")
                 }
                 (Some(n), Shape::Curve(c)) => {
-                    write_curve_polyline(&args.out, c, n as usize, &args.input)?;
+                    write_tessellated_curve_obj(
+                        &args.out,
+                        c,
+                        n as usize,
+                        &format!("nurbspring tessellation of {}", args.input.display()),
+                    )?;
                     format!("tessellated curve ({n} points)")
                 }
                 (None, _) => {
@@ -123,32 +130,4 @@ pub fn run(ctx: &Context, args: ExportArgs) -> CmdResult {
         println!("{what} written to {}", args.out.display());
     }
     Ok(())
-}
-
-fn write_curve_polyline(
-    out: &std::path::Path,
-    c: &nurbspring_geom::NurbsCurve,
-    n: usize,
-    input: &std::path::Path,
-) -> Result<(), Error> {
-    let (a, b) = c.domain();
-    let us = nurbspring_geom::linspace(a, b, n);
-    let invalid = |message: String| {
-        Error::Output(nurbspring_io::OutputError::InvalidData {
-            path: out.to_path_buf(),
-            message,
-        })
-    };
-    let points = us
-        .iter()
-        .map(|&u| c.point(u))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| invalid(e.to_string()))?;
-    let lines = (1..n).map(|i| [i - 1, i]).collect();
-    let mesh = nurbspring_io::output::ObjMesh::lattice(points, lines);
-    Ok(nurbspring_io::output::write_obj(
-        out,
-        &mesh,
-        &format!("nurbspring tessellation of {}", input.display()),
-    )?)
 }

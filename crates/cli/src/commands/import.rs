@@ -3,8 +3,9 @@
 use std::path::{Component, Path, PathBuf};
 
 use clap::Args;
-use nurbspring_io::atomic::write_atomic_bytes;
-use nurbspring_scene::geometry_file::{GeometrySource, imported_scene, read_geometry_file};
+use nurbspring_scene::geometry_file::{
+    GeometrySource, imported_scene, read_geometry_file, write_text_file,
+};
 use nurbspring_scene::{Error, GeometrySpec, Scene};
 
 use crate::{CmdResult, Context};
@@ -52,7 +53,7 @@ pub fn run(ctx: &Context, args: ImportArgs) -> CmdResult {
     let text = imported_scene(&geometry, &origin, &source);
     // The scene must load as written (with its path, so that a linked file resolves).
     let scene = Scene::from_str(&text, &args.out)?;
-    write_atomic_bytes(&args.out, text.as_bytes()).map_err(Error::Output)?;
+    write_text_file(&args.out, &text)?;
     for note in &file.notes {
         eprintln!("note: {note}");
     }

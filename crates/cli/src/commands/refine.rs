@@ -3,8 +3,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use nurbspring_io::atomic::write_atomic_bytes;
-use nurbspring_scene::geometry_file::{Refinement, refine_scene};
+use nurbspring_scene::geometry_file::{Refinement, refine_scene, write_text_file};
 use nurbspring_scene::{Error, GeometrySpec, Scene};
 
 use crate::{CmdResult, Context};
@@ -113,7 +112,7 @@ pub fn run(ctx: &Context, args: RefineArgs) -> CmdResult {
         describe(&refined.geometry),
         refined.to_toml()
     );
-    write_atomic_bytes(&args.out, text.as_bytes()).map_err(Error::Output)?;
+    write_text_file(&args.out, &text)?;
     if ctx.verbose() {
         println!(
             "refined {}: {} -> {}; written to {}",
