@@ -645,8 +645,9 @@ fn assert_same_trajectory(ours: &Path, theirs: &Path) {
 }
 
 /// The NumPy snippet of docs/export.md, run on the `.npz` export, reproduces `simulate`'s
-/// trajectory.csv: on a hand-made model with every feature, and on the derived string (linear
-/// elements only). Skipped when no Python with NumPy is found.
+/// trajectory.csv: on a hand-made model with every feature, on the derived string (linear
+/// elements only) and on a scene's spring lattice. Skipped when no Python with NumPy is found
+/// (`NURBSPRING_PYTHON` names the interpreter, default `python3`).
 #[test]
 fn numpy_snippet_reproduces_the_msm_trajectory() {
     let Some(python) = python_with("numpy") else {
@@ -663,10 +664,13 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
         .arg(&derived)
         .assert()
         .success();
-    for (k, model) in [small_msm(dir.path(), true, true), derived.join("msm.json")]
-        .iter()
-        .enumerate()
-    {
+    let models = [
+        small_msm(dir.path(), true, true),
+        derived.join("msm.json"),
+        // A scene's own lattice: damping, gravity, two probes, every 10th step kept.
+        examples().join("sheet_gravity.toml"),
+    ];
+    for (k, model) in models.iter().enumerate() {
         let npz = dir.path().join(format!("model{k}.npz"));
         bin()
             .arg("export")
