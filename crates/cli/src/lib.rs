@@ -96,6 +96,12 @@ enum Command {
     Steady(commands::steady::SteadyArgs),
     /// Validate a scene and describe it without running anything.
     Check(commands::check::CheckArgs),
+    /// Write a scene for the surface or curve of a geomdl JSON, IGES or OBJ file.
+    Import(commands::import::ImportArgs),
+    /// Write a scene's geometry (geomdl JSON, IGES, OBJ) or a mass-spring model (SOFA, NumPy).
+    Export(commands::export::ExportArgs),
+    /// Refine a scene's geometry exactly: degree elevation and knot insertion.
+    Refine(commands::refine::RefineArgs),
 }
 
 /// Result of a command.
@@ -201,6 +207,9 @@ pub fn main_with_args() -> ExitCode {
         Command::Stability(a) => commands::stability::run(&ctx, a),
         Command::Steady(a) => commands::steady::run(&ctx, a),
         Command::Check(a) => commands::check::run(&ctx, a),
+        Command::Import(a) => commands::import::run(&ctx, a),
+        Command::Export(a) => commands::export::run(&ctx, a),
+        Command::Refine(a) => commands::refine::run(&ctx, a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -162,9 +162,10 @@ fn sigterm_and_sighup_stop_cleanly_and_keep_the_previous_run() {
             "save_every = 1",
             "save_every = 1000\n[output]\nvtk_every = 100",
         );
-        let text = std::fs::read_to_string(&long)
-            .unwrap()
-            .replacen("[output]\nvtk_every = 1\n", "", 1);
+        let text =
+            std::fs::read_to_string(&long)
+                .unwrap()
+                .replacen("[output]\nvtk_every = 1\n", "", 1);
         std::fs::write(&long, text).unwrap();
         let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("nurbspring"))
             .arg("--quiet")

@@ -1,3 +1,4 @@
+#![allow(missing_docs)]
 //! `derive` with the default derivation (`modal`) on a 33 × 33 bicubic control net: scene text
 //! → fitted, calibrated and validated MSM (everything `nurbspring derive` computes before it
 //! writes files). `cargo bench -p nurbspring-scene --bench derive`.

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use nurbspring_derive::DeriveError;
+use nurbspring_exchange::ExchangeError;
 use nurbspring_io::OutputError;
 use nurbspring_msm::MsmError;
 use nurbspring_sim::ErrorKind;
@@ -56,6 +57,15 @@ pub enum Error {
         /// The estimate against the limit.
         message: String,
     },
+    /// A geometry file (geomdl JSON, IGES, OBJ) that cannot be read or does not describe valid
+    /// curves and surfaces; the message names the line where the format has lines.
+    #[error("{}", exchange_message(path, source))]
+    Exchange {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, and where in the file.
+        source: Box<ExchangeError>,
+    },
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] OutputError),
@@ -68,7 +78,10 @@ impl Error {
     /// Input, Run or Cancelled.
     pub fn kind(&self) -> ErrorKind {
         match self {
-            Error::Scene(_) | Error::Option { .. } | Error::Resources { .. } => ErrorKind::Input,
+            Error::Scene(_)
+            | Error::Option { .. }
+            | Error::Resources { .. }
+            | Error::Exchange { .. } => ErrorKind::Input,
             Error::MsmFile { source, .. } => source.kind(),
             Error::Model { source, .. } => source.kind(),
             Error::Output(_) => ErrorKind::Run,
@@ -100,5 +113,16 @@ impl Error {
             value: value.to_string(),
             message: message.into(),
         }
+    }
+}
+
+/// `path: message`, without repeating the path when the exchange error names it already.
+fn exchange_message(path: &std::path::Path, e: &ExchangeError) -> String {
+    match e {
+        ExchangeError::Io { .. }
+        | ExchangeError::FileTooLarge { .. }
+        | ExchangeError::NotRegularFile { .. }
+        | ExchangeError::NotText { .. } => e.to_string(),
+        _ => format!("{}: {e}", path.display()),
     }
 }

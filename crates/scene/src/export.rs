@@ -231,15 +231,13 @@ pub fn write_tessellation(
                     }
                     Ok(grid.write(out)?)
                 }
-                TessellationFormat::Obj => {
-                    let mesh = ObjMesh::quad_grid(pts, nu, nv).ok_or_else(|| {
-                        Error::Output(OutputError::InvalidData {
-                            path: out.to_path_buf(),
-                            message: "cannot build the quad mesh".to_string(),
-                        })
-                    })?;
-                    Ok(write_obj(out, &mesh, "nurbspring tessellated surface")?)
-                }
+                TessellationFormat::Obj => crate::geometry_file::write_tessellated_obj(
+                    out,
+                    s,
+                    nu,
+                    nv,
+                    "nurbspring tessellated surface (vt: parameters mapped to [0, 1]^2, vn: unit normals)",
+                ),
             }
         }
         Geometry::Curve(c) => {

@@ -36,7 +36,9 @@
 mod build;
 mod error;
 pub mod export;
+pub mod geometry_file;
 pub mod markdown;
+pub mod msm_export;
 pub mod msm_file;
 mod parse;
 pub mod report;

@@ -27,6 +27,8 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
     (
         "surface",
         &[
+            "file",
+            "index",
             "degree_u",
             "degree_v",
             "knots_u",
@@ -35,7 +37,17 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
             "weights",
         ],
     ),
-    ("curve", &["degree", "knots", "control_points", "weights"]),
+    (
+        "curve",
+        &[
+            "file",
+            "index",
+            "degree",
+            "knots",
+            "control_points",
+            "weights",
+        ],
+    ),
     (
         "material",
         &[

@@ -514,8 +514,8 @@ pub struct Scene {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawScene {
-    pub(crate) surface: Option<RawSurface>,
-    pub(crate) curve: Option<RawCurve>,
+    pub(crate) surface: Option<RawGeometry<RawSurface>>,
+    pub(crate) curve: Option<RawGeometry<RawCurve>>,
     #[serde(default)]
     pub(crate) material: Material,
     #[serde(default)]
@@ -536,27 +536,151 @@ pub(crate) struct RawScene {
     pub(crate) output: OutputSpec,
 }
 
+/// `[surface]` or `[curve]` as written: the geometry inline, or `file = "…"` (with an optional
+/// `index`) naming a geomdl JSON, IGES or OBJ file, its path relative to the scene file.
+pub(crate) enum RawGeometry<T> {
+    /// The keys of the table.
+    Inline(T),
+    /// `file` and `index`.
+    File {
+        /// As written in the scene.
+        file: String,
+        /// Which surface (or curve) of the file, 0-based (default 0).
+        index: usize,
+    },
+}
+
 /// `[surface]` with points as plain lists, so that their shapes are checked with key paths.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 pub(crate) struct RawSurface {
     pub(crate) degree_u: usize,
     pub(crate) degree_v: usize,
     pub(crate) knots_u: Vec<f64>,
     pub(crate) knots_v: Vec<f64>,
     pub(crate) control_points: Vec<Vec<Vec<f64>>>,
-    #[serde(default)]
     pub(crate) weights: Option<Vec<Vec<f64>>>,
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 pub(crate) struct RawCurve {
     pub(crate) degree: usize,
     pub(crate) knots: Vec<f64>,
     pub(crate) control_points: Vec<Vec<f64>>,
-    #[serde(default)]
     pub(crate) weights: Option<Vec<f64>>,
+}
+
+/// Every key `[surface]` may hold (the inline ones are required unless `file` is given).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SurfaceTable {
+    file: Option<String>,
+    index: Option<usize>,
+    degree_u: Option<usize>,
+    degree_v: Option<usize>,
+    knots_u: Option<Vec<f64>>,
+    knots_v: Option<Vec<f64>>,
+    control_points: Option<Vec<Vec<Vec<f64>>>>,
+    weights: Option<Vec<Vec<f64>>>,
+}
+
+/// Every key `[curve]` may hold.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CurveTable {
+    file: Option<String>,
+    index: Option<usize>,
+    degree: Option<usize>,
+    knots: Option<Vec<f64>>,
+    control_points: Option<Vec<Vec<f64>>>,
+    weights: Option<Vec<f64>>,
+}
+
+/// The `file` form, refusing inline keys next to it (`given` lists those present).
+fn file_form<T, E: de::Error>(
+    section: &str,
+    file: Option<String>,
+    index: Option<usize>,
+    given: &[(&str, bool)],
+) -> Result<Option<RawGeometry<T>>, E> {
+    let Some(file) = file else {
+        if index.is_some() {
+            return Err(E::custom(format!(
+                "`index` selects a shape of `file`; [{section}] has no `file` key"
+            )));
+        }
+        return Ok(None);
+    };
+    let inline: Vec<&str> = given.iter().filter(|g| g.1).map(|g| g.0).collect();
+    if !inline.is_empty() {
+        return Err(E::custom(format!(
+            "[{section}] gives `file` and also {}: give the geometry either from a file or inline, not both",
+            inline
+                .iter()
+                .map(|k| format!("`{k}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    Ok(Some(RawGeometry::File {
+        file,
+        index: index.unwrap_or(0),
+    }))
+}
+
+impl<'de> Deserialize<'de> for RawGeometry<RawSurface> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let t = SurfaceTable::deserialize(d)?;
+        let given = [
+            ("degree_u", t.degree_u.is_some()),
+            ("degree_v", t.degree_v.is_some()),
+            ("knots_u", t.knots_u.is_some()),
+            ("knots_v", t.knots_v.is_some()),
+            ("control_points", t.control_points.is_some()),
+            ("weights", t.weights.is_some()),
+        ];
+        if let Some(g) = file_form("surface", t.file, t.index, &given)? {
+            return Ok(g);
+        }
+        Ok(RawGeometry::Inline(RawSurface {
+            degree_u: t
+                .degree_u
+                .ok_or_else(|| de::Error::missing_field("degree_u"))?,
+            degree_v: t
+                .degree_v
+                .ok_or_else(|| de::Error::missing_field("degree_v"))?,
+            knots_u: t
+                .knots_u
+                .ok_or_else(|| de::Error::missing_field("knots_u"))?,
+            knots_v: t
+                .knots_v
+                .ok_or_else(|| de::Error::missing_field("knots_v"))?,
+            control_points: t
+                .control_points
+                .ok_or_else(|| de::Error::missing_field("control_points"))?,
+            weights: t.weights,
+        }))
+    }
+}
+
+impl<'de> Deserialize<'de> for RawGeometry<RawCurve> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let t = CurveTable::deserialize(d)?;
+        let given = [
+            ("degree", t.degree.is_some()),
+            ("knots", t.knots.is_some()),
+            ("control_points", t.control_points.is_some()),
+            ("weights", t.weights.is_some()),
+        ];
+        if let Some(g) = file_form("curve", t.file, t.index, &given)? {
+            return Ok(g);
+        }
+        Ok(RawGeometry::Inline(RawCurve {
+            degree: t.degree.ok_or_else(|| de::Error::missing_field("degree"))?,
+            knots: t.knots.ok_or_else(|| de::Error::missing_field("knots"))?,
+            control_points: t
+                .control_points
+                .ok_or_else(|| de::Error::missing_field("control_points"))?,
+            weights: t.weights,
+        }))
+    }
 }
 
 #[derive(Deserialize, Serialize, Default)]

@@ -96,6 +96,11 @@ struct GeomInfo {
 /// Validates everything and builds the scene.
 pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneError> {
     let mut p = Problems::default();
+    let section = if raw.surface.is_some() {
+        "surface"
+    } else {
+        "curve"
+    };
     let (geometry, info) = match (raw.surface, raw.curve) {
         (Some(_), Some(_)) => {
             p.push(
@@ -113,20 +118,36 @@ pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneErro
             );
             (None, None)
         }
-        (Some(s), None) => match surface_spec(s, &mut p) {
+        (Some(RawGeometry::Inline(s)), None) => match surface_spec(s, &mut p) {
             Some(spec) => {
                 let info = surface_info(&spec, &mut p);
                 (Some(GeometrySpec::Surface(spec)), info)
             }
             None => (None, None),
         },
-        (None, Some(c)) => match curve_spec(c, &mut p) {
+        (None, Some(RawGeometry::Inline(c))) => match curve_spec(c, &mut p) {
             Some(spec) => {
                 let info = curve_info(&spec, &mut p);
                 (Some(GeometrySpec::Curve(spec)), info)
             }
             None => (None, None),
         },
+        (Some(RawGeometry::File { file, index }), None)
+        | (None, Some(RawGeometry::File { file, index })) => {
+            match crate::geometry_file::load_geometry(path, section, &file, index) {
+                Ok(spec) => {
+                    let info = match &spec {
+                        GeometrySpec::Surface(s) => surface_info(s, &mut p),
+                        GeometrySpec::Curve(c) => curve_info(c, &mut p),
+                    };
+                    (Some(spec), info)
+                }
+                Err(problem) => {
+                    p.0.push(problem);
+                    (None, None)
+                }
+            }
+        }
     };
     check_material(&raw.material, info.as_ref(), &mut p);
     check_loads(&raw.loads, info.as_ref(), &mut p);

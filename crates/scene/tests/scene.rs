@@ -1083,3 +1083,81 @@ proptest! {
         let _ = Scene::from_str(&text, "r.toml");
     }
 }
+
+/// `[surface] file = "…"` loads the surface relative to the scene file; `to_toml` writes it
+/// inline and reads back to the same scene; `[curve] file` likewise; problems name the key.
+#[test]
+fn geometry_from_a_file_relative_to_the_scene() {
+    use nurbspring_scene::geometry_file::{GeometryFormat, write_geometry_file};
+    let dir = tempfile::tempdir().unwrap();
+    let paper = Scene::from_path(data("paper.toml")).unwrap();
+    let surface = paper.to_surface().unwrap();
+    let sub = dir.path().join("geometry");
+    std::fs::create_dir(&sub).unwrap();
+    write_geometry_file(
+        &sub.join("sheet.igs"),
+        GeometryFormat::Iges,
+        &[paper.shape().unwrap()],
+    )
+    .unwrap();
+    let text = paper_text();
+    let start = text.find("[surface]").unwrap();
+    let end = text.find("[material]").unwrap();
+    let linked = format!(
+        "{}[surface]\nfile = \"geometry/sheet.igs\"\n\n{}",
+        &text[..start],
+        &text[end..]
+    );
+    let path = dir.path().join("linked.toml");
+    std::fs::write(&path, &linked).unwrap();
+    let scene = Scene::from_path(&path).unwrap();
+    assert_eq!(scene.to_surface().unwrap(), surface);
+    assert_eq!(scene.geometry, paper.geometry);
+    let back = Scene::from_str(&scene.to_toml(), &path).unwrap();
+    assert_eq!(back, scene);
+
+    // A curve.
+    let string =
+        Scene::from_path(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/string.toml"))
+            .unwrap();
+    write_geometry_file(
+        &dir.path().join("string.obj"),
+        GeometryFormat::ObjFreeForm,
+        &[string.shape().unwrap()],
+    )
+    .unwrap();
+    let curve = Scene::from_str(
+        "[curve]\nfile = \"string.obj\"\n[material]\nmu = 1\nalpha11 = 1\n",
+        dir.path().join("c.toml"),
+    )
+    .unwrap();
+    assert_eq!(curve.to_curve().unwrap(), string.to_curve().unwrap());
+
+    // Problems: a surface asked of a curve file, an index past the end, file next to inline keys.
+    let err = Scene::from_str(
+        "[surface]\nfile = \"string.obj\"\n",
+        dir.path().join("s.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("surface.file = \"string.obj\"") && err.contains("no surface"),
+        "{err}"
+    );
+    let err = Scene::from_str(
+        "[curve]\nfile = \"string.obj\"\nindex = 2\n",
+        dir.path().join("s.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("index 2"), "{err}");
+    let err = Scene::from_str(
+        "[curve]\nfile = \"string.obj\"\ndegree = 2\n",
+        dir.path().join("s.toml"),
+    )
+    .unwrap_err();
+    assert_eq!(err.kind(), SceneErrorKind::Parse);
+    assert!(err.to_string().contains("`degree`"), "{err}");
+    let err = Scene::from_str("[curve]\nindex = 1\n", "s.toml").unwrap_err();
+    assert!(err.to_string().contains("no `file` key"), "{err}");
+}

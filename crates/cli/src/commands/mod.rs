@@ -3,9 +3,12 @@
 pub mod check;
 pub mod derive;
 pub mod eval;
+pub mod export;
+pub mod import;
 pub mod matrices;
 pub mod modes;
 pub mod paper;
+pub mod refine;
 pub mod simulate;
 pub mod stability;
 pub mod steady;

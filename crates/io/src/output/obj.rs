@@ -17,6 +17,10 @@ pub struct ObjMesh {
     pub faces: Vec<Vec<usize>>,
     /// Line elements as pairs of 0-based vertex indices.
     pub lines: Vec<[usize; 2]>,
+    /// Texture coordinates `(u, v)`, one per vertex, or empty (written as `vt`).
+    pub uvs: Vec<[f64; 2]>,
+    /// Unit normals, one per vertex, or empty (written as `vn`).
+    pub normals: Vec<[f64; 3]>,
 }
 
 impl ObjMesh {
@@ -44,7 +48,7 @@ impl ObjMesh {
         Some(Self {
             vertices: points,
             faces,
-            lines: Vec::new(),
+            ..Self::default()
         })
     }
 
@@ -52,14 +56,24 @@ impl ObjMesh {
     pub fn lattice(nodes: Vec<[f64; 3]>, springs: Vec<[usize; 2]>) -> Self {
         Self {
             vertices: nodes,
-            faces: Vec::new(),
             lines: springs,
+            ..Self::default()
         }
     }
 
     /// Checks that every index refers to a vertex and every face has at least 3 corners.
     fn check(&self) -> Result<(), String> {
         let n = self.vertices.len();
+        for (what, len) in [
+            ("texture coordinates", self.uvs.len()),
+            ("normals", self.normals.len()),
+        ] {
+            if len != 0 && len != n {
+                return Err(format!(
+                    "{len} {what} for {n} vertices (one per vertex or none)"
+                ));
+            }
+        }
         for (f, face) in self.faces.iter().enumerate() {
             if face.len() < 3 {
                 return Err(format!(
@@ -84,8 +98,9 @@ impl ObjMesh {
     }
 }
 
-/// Writes `mesh` as an OBJ file (`v x y z`, `f a b c …`, `l a b`, 1-based), with `comment` as
-/// `#` lines at the top. Numbers read back exactly.
+/// Writes `mesh` as an OBJ file (`v x y z`, `vt u v`, `vn x y z`, `f a b c …` (`a/a/a` with
+/// texture coordinates and normals), `l a b`, 1-based), with `comment` as `#` lines at the top.
+/// Numbers read back exactly.
 pub fn write_obj(path: impl AsRef<Path>, mesh: &ObjMesh, comment: &str) -> Result<(), OutputError> {
     let path = path.as_ref();
     mesh.check().map_err(|m| OutputError::invalid(path, m))?;
@@ -102,10 +117,29 @@ pub fn write_obj(path: impl AsRef<Path>, mesh: &ObjMesh, comment: &str) -> Resul
                 format_f64(v[2])
             )?;
         }
+        for t in &mesh.uvs {
+            writeln!(w, "vt {} {}", format_f64(t[0]), format_f64(t[1]))?;
+        }
+        for n in &mesh.normals {
+            writeln!(
+                w,
+                "vn {} {} {}",
+                format_f64(n[0]),
+                format_f64(n[1]),
+                format_f64(n[2])
+            )?;
+        }
+        let (uv, normal) = (!mesh.uvs.is_empty(), !mesh.normals.is_empty());
         for face in &mesh.faces {
             write!(w, "f")?;
             for k in face {
-                write!(w, " {}", k + 1)?;
+                let k = k + 1;
+                match (uv, normal) {
+                    (false, false) => write!(w, " {k}")?,
+                    (true, false) => write!(w, " {k}/{k}")?,
+                    (false, true) => write!(w, " {k}//{k}")?,
+                    (true, true) => write!(w, " {k}/{k}/{k}")?,
+                }
             }
             writeln!(w)?;
         }
