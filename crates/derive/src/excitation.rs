@@ -12,12 +12,12 @@ use nurbspring_linalg::{
     DenseMatrix, SparseMatrix, cholesky_solve_dense, generalized_eigen_sparse_lowest,
 };
 use nurbspring_msm::{Class, Constants};
-use serde::Serialize;
 
 use crate::DeriveError;
 use crate::evaluation::DnurbsModes;
-use crate::linear::NodeMap;
 use crate::modal::{ModalSolution, combine, lowest_frequency};
+use crate::nodes::NodeMap;
+use crate::outcome::ExcitationReport;
 use crate::validation::mac;
 
 /// Modes weighted.
@@ -28,27 +28,6 @@ pub const CONSTANT_RANGE: f64 = 1e3;
 pub const STEP_SHRINK: f64 = 10.0;
 /// Levenberg–Marquardt iterations.
 const ITERATIONS: usize = 40;
-
-/// What the excitation-aware fit reports.
-#[derive(Clone, Debug, Serialize)]
-pub struct ExcitationReport {
-    /// The classes refined.
-    pub classes: Vec<Class>,
-    /// Their constants.
-    pub constants: Constants,
-    /// The modal fit it started from.
-    pub modal_constants: Constants,
-    /// The D-NURBS modes weighted (1 = lowest) and their shares of the motion.
-    pub modes: Vec<(usize, f64)>,
-    /// Weighted residual norm at the start and at the end.
-    pub residual: (f64, f64),
-    /// Levenberg–Marquardt iterations taken.
-    pub iterations: usize,
-    /// The calibration factor of the masses.
-    pub mass_scale: f64,
-    /// Explicit step limit `2/ω_max` of the modal fit and of this one.
-    pub dt_critical: (f64, f64),
-}
 
 /// The refined model.
 pub struct ExcitationSolution {

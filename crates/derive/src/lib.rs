@@ -42,6 +42,7 @@ mod linear;
 mod mass;
 mod modal;
 mod modal_solution;
+mod nodes;
 mod omega;
 mod outcome;
 pub mod paper;
@@ -56,7 +57,6 @@ pub use error::DeriveError;
 pub use evaluation::{
     DnurbsModes, PERIODS, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, horizon,
 };
-pub use excitation::ExcitationReport;
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use linear::derive_linear;
 pub use mass::{distinct_non_null, mass_eigenvalues};
@@ -67,12 +67,13 @@ pub use modal::{
 pub use modal_solution::ModalBasis;
 pub use omega::{NodeState, Omega};
 pub use outcome::{
-    Derivation, FitDetail, FrequencyRow, MassCandidate, MassReport, NodeReduction, ParameterSet,
-    ProbeError, ReductionReport, Spectrum, Validation,
+    Derivation, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport,
+    NodeReduction, ParameterSet, ProbeError, ReductionReport, Spectrum, TrustRegionReport,
+    Validation,
 };
 pub use pipeline::{
-    FitReport, Judge, SelectedReading, TrustRegionReport, derive_msm, evaluate, fit_step,
-    mass_step, msm_spectrum, reference_run, spectra,
+    Judge, SelectedReading, derive_msm, evaluate, fit_step, mass_step, msm_spectrum, reference_run,
+    spectra,
 };
 pub use reference::ReferenceKind;
 pub use runner::{Recording, Watched, record, record_noted};

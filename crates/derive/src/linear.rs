@@ -17,6 +17,7 @@ use crate::evaluation::{
 use crate::excitation::excitation_fit;
 use crate::modal::{MODES, SampledMode, modal_fit};
 use crate::modal_solution::ModalBasis;
+use crate::nodes::NodeMap;
 use crate::outcome::{
     Derivation, FitDetail, MassReport, NodeReduction, ParameterSet, ReductionReport, Spectrum,
 };
@@ -27,44 +28,6 @@ use crate::setup::{Config, Method, Setup};
 
 /// A load below this fraction of the largest is no load (round-off).
 const NO_LOAD: f64 = 1e-12;
-
-/// The lattice's free nodes and the scalar Ω between them and the free control points.
-pub(crate) struct NodeMap {
-    /// Free nodes, ascending.
-    pub free: Vec<usize>,
-    /// Scalar Ω, free nodes × free control points.
-    pub omega_ff: SparseMatrix,
-}
-
-impl NodeMap {
-    fn new(setup: &Setup, modes: &DnurbsModes) -> Result<Self, DeriveError> {
-        let lattice = setup.lattice();
-        let free: Vec<usize> = (0..lattice.n_nodes())
-            .filter(|&a| !lattice.fixed[a])
-            .collect();
-        if free.is_empty() {
-            return Err(DeriveError::InvalidOption {
-                name: "msm.grid",
-                value: format!("{} nodes, all fixed", lattice.n_nodes()),
-                reason: "the derivation needs free lattice nodes".into(),
-            });
-        }
-        let omega_ff = scalar_rows(setup.omega().matrix()).submatrix(&free, &modes.system.free);
-        Ok(Self { free, omega_ff })
-    }
-
-    /// `Ω_ff x`.
-    pub fn at_nodes(&self, x: &[f64]) -> Vec<f64> {
-        let mut y = vec![0.0; self.omega_ff.nrows()];
-        self.omega_ff.mul_vec(x, &mut y);
-        y
-    }
-
-    /// True when Ω_ff is square (a Greville lattice: one free node per free control point).
-    pub fn is_square(&self) -> bool {
-        self.omega_ff.nrows() == self.omega_ff.ncols()
-    }
-}
 
 /// The mass of each node's dual cell in parameter space, `μ τ_u τ_v` (times `|c_u × c_v|`
 /// under area integration; a chain: `μ τ_u`).

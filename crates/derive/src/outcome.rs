@@ -3,13 +3,13 @@
 //! second excitation, a frequency table and the warnings a user should read.
 
 use nurbspring_linalg::DenseMatrix;
-use nurbspring_msm::{Constants, SpringLattice};
+use nurbspring_msm::{Class, Constants, SpringLattice};
 use nurbspring_sim::IntegratorKind;
 use serde::Serialize;
 
 use crate::Trajectory;
+use crate::fit::FitResult;
 use crate::modal::ModalFitReport;
-use crate::pipeline::FitReport;
 use crate::reference::ReferenceKind;
 use crate::setup::Method;
 
@@ -201,7 +201,7 @@ pub enum FitDetail {
     /// The modal fit.
     Modal(ModalFitReport),
     /// The excitation-aware fit.
-    Excitation(crate::excitation::ExcitationReport),
+    Excitation(ExcitationReport),
     /// The exact reduction.
     Reduction(ReductionReport),
 }
@@ -254,4 +254,57 @@ impl Derivation {
             _ => None,
         }
     }
+}
+
+/// The four readings of eq. (15) plus the trust-region check.
+#[derive(Clone, Debug, Serialize)]
+pub struct FitReport {
+    /// Classes fitted.
+    pub classes: Vec<Class>,
+    /// Every dof, unconstrained (the literal equation).
+    pub all_dofs: FitResult,
+    /// Free dofs only, unconstrained.
+    pub free_dofs: FitResult,
+    /// Every dof, `k ≥ 0`.
+    pub all_dofs_nonnegative: FitResult,
+    /// Free dofs only, `k ≥ 0`.
+    pub free_dofs_nonnegative: FitResult,
+    /// The trust-region solution for the selected reading and its agreement with the closed form.
+    pub trust_region: TrustRegionReport,
+    /// The reading used for the derived MSM, in words.
+    pub selected_reading: String,
+    /// The constants used for the derived MSM.
+    pub selected: FitResult,
+}
+
+/// The trust-region solve of the selected reading.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrustRegionReport {
+    /// Its constants.
+    pub result: FitResult,
+    /// Iterations.
+    pub iterations: usize,
+    /// Largest relative difference to the closed form.
+    pub max_relative_difference_to_closed_form: f64,
+}
+
+/// What the excitation-aware fit reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct ExcitationReport {
+    /// The classes refined.
+    pub classes: Vec<Class>,
+    /// Their constants.
+    pub constants: Constants,
+    /// The modal fit it started from.
+    pub modal_constants: Constants,
+    /// The D-NURBS modes weighted (1 = lowest) and their shares of the motion.
+    pub modes: Vec<(usize, f64)>,
+    /// Weighted residual norm at the start and at the end.
+    pub residual: (f64, f64),
+    /// Levenberg–Marquardt iterations taken.
+    pub iterations: usize,
+    /// The calibration factor of the masses.
+    pub mass_scale: f64,
+    /// Explicit step limit `2/ω_max` of the modal fit and of this one.
+    pub dt_critical: (f64, f64),
 }

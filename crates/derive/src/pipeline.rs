@@ -9,7 +9,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use nurbspring_dnurbs::{DnurbsModel, Loads};
 use nurbspring_msm::{Class, Constants, MsmModel, SpringLattice};
 use nurbspring_sim::{DynamicModel, IntegratorKind, RunOptions, State};
-use serde::Serialize;
 
 use crate::DeriveError;
 use crate::evaluation::{
@@ -19,8 +18,8 @@ use crate::evaluation::{
 use crate::fit::{FitDofs, FitResult};
 use crate::mass::mass_eigenvalues;
 use crate::outcome::{
-    Derivation, FitDetail, FrequencyRow, MassCandidate, MassReport, ParameterSet, Spectrum,
-    Validation,
+    Derivation, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport, ParameterSet,
+    Spectrum, TrustRegionReport, Validation,
 };
 use crate::reference::{ReferenceKind, run_scalar, sample_times};
 use crate::runner::{Watched, record_noted};
@@ -68,38 +67,6 @@ impl std::fmt::Display for SelectedReading {
         }
         Ok(())
     }
-}
-
-/// The four readings of eq. (15) plus the trust-region check.
-#[derive(Clone, Debug, Serialize)]
-pub struct FitReport {
-    /// Classes fitted.
-    pub classes: Vec<Class>,
-    /// Every dof, unconstrained (the literal equation).
-    pub all_dofs: FitResult,
-    /// Free dofs only, unconstrained.
-    pub free_dofs: FitResult,
-    /// Every dof, `k ≥ 0`.
-    pub all_dofs_nonnegative: FitResult,
-    /// Free dofs only, `k ≥ 0`.
-    pub free_dofs_nonnegative: FitResult,
-    /// The trust-region solution for the selected reading and its agreement with the closed form.
-    pub trust_region: TrustRegionReport,
-    /// The reading used for the derived MSM, in words.
-    pub selected_reading: String,
-    /// The constants used for the derived MSM.
-    pub selected: FitResult,
-}
-
-/// The trust-region solve of the selected reading.
-#[derive(Clone, Debug, Serialize)]
-pub struct TrustRegionReport {
-    /// Its constants.
-    pub result: FitResult,
-    /// Iterations.
-    pub iterations: usize,
-    /// Largest relative difference to the closed form.
-    pub max_relative_difference_to_closed_form: f64,
 }
 
 /// Largest model whose full spectrum is reported (dense eigenproblems).
