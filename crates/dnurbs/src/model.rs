@@ -49,6 +49,49 @@ impl Modes {
     }
 }
 
+/// Settings of the nonlinear steady-state iteration ([`DnurbsModel::steady_state_with`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SteadySettings {
+    /// Relative residual at which the iteration stops (default 1e-13).
+    pub tolerance: f64,
+    /// Iteration limit (default 200).
+    pub max_iterations: usize,
+}
+
+impl Default for SteadySettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-13,
+            max_iterations: 200,
+        }
+    }
+}
+
+/// The result of [`DnurbsModel::steady_state_with`].
+#[derive(Clone, Debug)]
+pub struct SteadyState {
+    /// The full generalized coordinates at rest.
+    pub p: Vec<f64>,
+    /// Iterates assembled (1 for constant weights).
+    pub iterations: usize,
+    /// Relative residual of the equilibrium at `p` (0 for constant weights).
+    pub residual: f64,
+}
+
+fn sub(a: &[f64], b: &[f64]) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x - y).collect()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    a.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+fn mul(a: &SparseMatrix, x: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; a.nrows()];
+    a.mul_vec(x, &mut out);
+    out
+}
+
 /// A D-NURBS surface or curve with material, loads and constraints, reduced to its free dofs
 /// (docs/math.md §3–4). Implements [`DynamicModel`].
 #[derive(Clone, Debug)]
@@ -284,16 +327,103 @@ impl DnurbsModel {
         0.5 * self.matrices.stiffness.quadratic_form(&d)
     }
 
-    /// Steady state (paper eq. (8), docs/math.md §3): the full `p` solving
-    /// `K_ff (p_f − p_rest,f) = f_f − K_fc (p_c − p_rest,c)` on the free dofs (projected by `Gᵀ`
-    /// with linear constraints). Returns [`DnurbsError::Singular`] when the reduced stiffness is
-    /// singular, e.g. a free-floating body (nothing fixed: rigid translations cost no energy).
+    /// Steady state (paper eq. (8), docs/math.md §3): the full `p` at rest, solving
+    /// `K(p) (p − p_rest) = f_p(p)` on the free dofs (projected by `Gᵀ` with linear
+    /// constraints).
+    ///
+    /// With constant weights K and f are constant and this is one linear solve,
+    /// [`DnurbsModel::linearized_steady_state`]. With weights as unknowns K and f depend on the
+    /// shape and the nonlinear equilibrium is found by the fixed-point iteration of
+    /// [`DnurbsModel::steady_state_with`] started from the linearized solution.
+    ///
+    /// Returns [`DnurbsError::Singular`] when the reduced stiffness is singular, e.g. a
+    /// free-floating body (nothing fixed: rigid translations cost no energy).
     pub fn steady_state(&self) -> Result<Vec<f64>, DnurbsError> {
+        if self.options.weights_as_dofs {
+            Ok(self.steady_state_with(SteadySettings::default())?.p)
+        } else {
+            self.linearized_steady_state()
+        }
+    }
+
+    /// The linear steady state with the matrices of the initial shape: `K(p(0)) (p − p_rest) =
+    /// f_p(p(0))` on the free dofs. With constant weights it is the steady state; with weights
+    /// as unknowns it is the first iterate of [`DnurbsModel::steady_state_with`].
+    pub fn linearized_steady_state(&self) -> Result<Vec<f64>, DnurbsError> {
+        self.solve_at(&self.stiffness_r, &self.f_ext, &self.f_int0)
+    }
+
+    /// The nonlinear steady state with weights as unknowns (docs/math.md §3): the fixed-point
+    /// iteration `K(p_k) (p_{k+1} − p_rest) = f_p(p_k)` on the free dofs from the linearized
+    /// solution `p_1`, with M, K, f assembled at each iterate `p_k`. It stops when the relative
+    /// residual `|Pᵀ (f_p(p_k) − K(p_k)(p_k − p_rest))| / (|Pᵀ f_p(p_k)| + |Pᵀ K(p_k)(p_k − p_rest)|)`
+    /// is at most `settings.tolerance`, and fails with [`DnurbsError::Singular`] when it is
+    /// not reached within `settings.max_iterations` or a weight becomes non-positive. With
+    /// constant weights the first iterate is exact and the result has `iterations = 1`.
+    pub fn steady_state_with(&self, settings: SteadySettings) -> Result<SteadyState, DnurbsError> {
+        let mut p = self.linearized_steady_state()?;
+        let wad = self.options.weights_as_dofs;
+        if !wad || self.reduction.n_q == 0 {
+            return Ok(SteadyState {
+                p,
+                iterations: 1,
+                residual: 0.0,
+            });
+        }
+        let assembler = crate::Assembler::new(&self.geometry, &self.options)?;
+        let mut residual = f64::INFINITY;
+        for k in 1..=settings.max_iterations {
+            if let Some(d) = (0..p.len() / 4).map(|i| 4 * i + 3).find(|&d| !(p[d] > 0.0)) {
+                return Err(DnurbsError::Singular {
+                    detail: format!(
+                        "the steady-state iteration reached weight {} = {:e} of control point {} (iteration {k}); the nonlinear equilibrium with weights as unknowns is not reachable from the initial shape (hold weights with constraints.fixed_weights or constraints.fixed_point_weights)",
+                        d,
+                        p[d],
+                        d / 4
+                    ),
+                });
+            }
+            let geo = self.geometry.with_coordinates(&p, true)?;
+            let mats = assembler.assemble(&geo, &self.material, &self.loads)?;
+            let k_r = self.reduction.reduce_matrix(&mats.stiffness)?;
+            let f_r = self.reduction.reduce_vector(&mats.force);
+            let elastic = self.reduction.reduce_vector(&mul(&mats.stiffness, &sub(&p, &self.p_rest)));
+            let r: Vec<f64> = f_r.iter().zip(&elastic).map(|(f, e)| f - e).collect();
+            let scale = norm(&f_r) + norm(&elastic);
+            residual = if scale > 0.0 { norm(&r) / scale } else { 0.0 };
+            if residual <= settings.tolerance {
+                return Ok(SteadyState {
+                    p,
+                    iterations: k,
+                    residual,
+                });
+            }
+            let f_int0 = self
+                .reduction
+                .reduce_vector(&mul(&mats.stiffness, &sub(&self.reduction.offset, &self.p_rest)));
+            p = self.solve_at(&k_r, &f_r, &f_int0)?;
+        }
+        Err(DnurbsError::Singular {
+            detail: format!(
+                "the steady-state iteration with weights as unknowns did not converge in {} iterations (relative residual {residual:e}, tolerance {:e}); the loads are too large for the iteration from the initial shape",
+                settings.max_iterations, settings.tolerance
+            ),
+        })
+    }
+
+    /// Solves `k_r q = f − f_int0` with the singularity checks of [`DnurbsModel::steady_state`]
+    /// and returns the full `p`.
+    fn solve_at(
+        &self,
+        k_r: &SparseMatrix,
+        f_ext: &[f64],
+        f_int0: &[f64],
+    ) -> Result<Vec<f64>, DnurbsError> {
         let n = self.reduction.n_q;
         if n == 0 {
             return Ok(self.reduction.to_full(&[]));
         }
-        if self.stiffness_r.frobenius_norm() == 0.0 {
+        if k_r.frobenius_norm() == 0.0 {
             return Err(DnurbsError::Singular {
                 detail: "the stiffness matrix is zero: every alpha and beta coefficient is 0"
                     .into(),
@@ -323,7 +453,7 @@ impl DnurbsModel {
                 });
             }
         }
-        let solver = SpdSolver::new(&self.stiffness_r).map_err(|e| match e {
+        let solver = SpdSolver::new(k_r).map_err(|e| match e {
             LinalgError::NotPositiveDefinite { detail } => DnurbsError::Singular {
                 detail: format!(
                     "the stiffness on the {n} free dofs is not positive definite ({detail}); \
@@ -338,15 +468,9 @@ impl DnurbsModel {
             .map(|i| 1.0 + ((i * 7919) % 13) as f64 / 13.0)
             .collect();
         let mut ky = vec![0.0; n];
-        self.stiffness_r.mul_vec(&y, &mut ky);
+        k_r.mul_vec(&y, &mut ky);
         let x = solver.solve(&ky);
-        let rel = x
-            .iter()
-            .zip(&y)
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum::<f64>()
-            .sqrt()
-            / y.iter().map(|a| a * a).sum::<f64>().sqrt();
+        let rel = norm(&sub(&x, &y)) / norm(&y);
         if rel.is_nan() || rel >= 1e-6 {
             return Err(DnurbsError::Singular {
                 detail: format!(
@@ -355,13 +479,7 @@ impl DnurbsModel {
                 ),
             });
         }
-        let rhs: Vec<f64> = self
-            .f_ext
-            .iter()
-            .zip(&self.f_int0)
-            .map(|(f, b)| f - b)
-            .collect();
-        let q = solver.solve(&rhs);
+        let q = solver.solve(&sub(f_ext, f_int0));
         if q.iter().any(|v| !v.is_finite()) {
             return Err(DnurbsError::Singular {
                 detail: "the steady-state solve produced non-finite values".into(),
