@@ -78,6 +78,29 @@ pub struct SteadyState {
     pub residual: f64,
 }
 
+/// Iterates mixed by [`DnurbsModel::steady_state_with`].
+pub const ANDERSON_DEPTH: usize = 5;
+
+/// The Anderson update `G_k − ΔG γ` with `γ` minimizing `|F_k − ΔF γ|` over the differences of
+/// the history `(G_j, F_j = G_j − q_j)`; `None` with fewer than two entries or a singular fit.
+fn anderson(history: &[(Vec<f64>, Vec<f64>)]) -> Option<Vec<f64>> {
+    let m = history.len().checked_sub(1).filter(|&m| m > 0)?;
+    let (g_k, f_k) = history.last()?;
+    let n = f_k.len();
+    let df = DenseMatrix::from_fn(n, m, |i, j| history[j + 1].1[i] - history[j].1[i]);
+    let gamma = nurbspring_linalg::least_squares(&df, f_k).ok()?;
+    if gamma.iter().any(|g| !g.is_finite()) {
+        return None;
+    }
+    let mut out = g_k.clone();
+    for (j, &c) in gamma.iter().enumerate() {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o -= c * (history[j + 1].0[i] - history[j].0[i]);
+        }
+    }
+    Some(out)
+}
+
 fn sub(a: &[f64], b: &[f64]) -> Vec<f64> {
     a.iter().zip(b).map(|(x, y)| x - y).collect()
 }
@@ -353,31 +376,39 @@ impl DnurbsModel {
         self.solve_at(&self.stiffness_r, &self.f_ext, &self.f_int0)
     }
 
-    /// The nonlinear steady state with weights as unknowns (docs/math.md §3): the fixed-point
-    /// iteration `K(p_k) (p_{k+1} − p_rest) = f_p(p_k)` on the free dofs from the linearized
-    /// solution `p_1`, with M, K, f assembled at each iterate `p_k`. It stops when the relative
-    /// residual `|Pᵀ (f_p(p_k) − K(p_k)(p_k − p_rest))| / (|Pᵀ f_p(p_k)| + |Pᵀ K(p_k)(p_k − p_rest)|)`
-    /// is at most `settings.tolerance`, and fails with [`DnurbsError::Singular`] when it is
-    /// not reached within `settings.max_iterations` or a weight becomes non-positive. With
-    /// constant weights the first iterate is exact and the result has `iterations = 1`.
+    /// The nonlinear steady state with weights as unknowns (docs/math.md §3): the fixed point
+    /// of `G(p) = p⁺` with `K(p) (p⁺ − p_rest) = f_p(p)` on the free dofs, M, K and f
+    /// assembled at each iterate, started from the linearized solution and accelerated by
+    /// Anderson mixing over the last [`ANDERSON_DEPTH`] iterates. It stops when the relative
+    /// residual `|Pᵀ (f_p(p) − K(p)(p − p_rest))| / (|Pᵀ f_p(p)| + |Pᵀ K(p)(p − p_rest)|)` is at
+    /// most `settings.tolerance`, or when the update falls to round-off (`|G(p) − p| ≤ 10⁻¹⁴ |p|`);
+    /// it fails with [`DnurbsError::Singular`] when neither happens within
+    /// `settings.max_iterations` or a weight becomes non-positive. With constant weights the
+    /// first iterate is exact (`iterations = 1`).
     pub fn steady_state_with(&self, settings: SteadySettings) -> Result<SteadyState, DnurbsError> {
-        let mut p = self.linearized_steady_state()?;
+        let p1 = self.linearized_steady_state()?;
         let wad = self.options.weights_as_dofs;
         if !wad || self.reduction.n_q == 0 {
             return Ok(SteadyState {
-                p,
+                p: p1,
                 iterations: 1,
                 residual: 0.0,
             });
         }
         let assembler = crate::Assembler::new(&self.geometry, &self.options)?;
+        let mut q = self.reduction.reduce_coordinates(&p1);
         let mut residual = f64::INFINITY;
+        // Anderson history: (G(q_j), G(q_j) − q_j).
+        let mut history: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
         for k in 1..=settings.max_iterations {
-            if let Some(d) = (0..p.len() / 4).map(|i| 4 * i + 3).find(|&d| !(p[d] > 0.0)) {
+            let p = self.reduction.to_full(&q);
+            if let Some(d) = (0..p.len() / 4).map(|i| 4 * i + 3).find(|&d| p[d] <= 0.0) {
                 return Err(DnurbsError::Singular {
                     detail: format!(
-                        "the steady-state iteration reached weight {} = {:e} of control point {} (iteration {k}); the nonlinear equilibrium with weights as unknowns is not reachable from the initial shape (hold weights with constraints.fixed_weights or constraints.fixed_point_weights)",
-                        d,
+                        "the steady-state iteration reached weight {:e} of control point {} \
+                         (iteration {k}); the nonlinear equilibrium with weights as unknowns is \
+                         not reachable from the initial shape under these loads (hold weights \
+                         with constraints.fixed_weights or constraints.fixed_point_weights)",
                         p[d],
                         d / 4
                     ),
@@ -387,10 +418,15 @@ impl DnurbsModel {
             let mats = assembler.assemble(&geo, &self.material, &self.loads)?;
             let k_r = self.reduction.reduce_matrix(&mats.stiffness)?;
             let f_r = self.reduction.reduce_vector(&mats.force);
-            let elastic = self.reduction.reduce_vector(&mul(&mats.stiffness, &sub(&p, &self.p_rest)));
-            let r: Vec<f64> = f_r.iter().zip(&elastic).map(|(f, e)| f - e).collect();
+            let elastic = self
+                .reduction
+                .reduce_vector(&mul(&mats.stiffness, &sub(&p, &self.p_rest)));
             let scale = norm(&f_r) + norm(&elastic);
-            residual = if scale > 0.0 { norm(&r) / scale } else { 0.0 };
+            residual = if scale > 0.0 {
+                norm(&sub(&f_r, &elastic)) / scale
+            } else {
+                0.0
+            };
             if residual <= settings.tolerance {
                 return Ok(SteadyState {
                     p,
@@ -398,14 +434,32 @@ impl DnurbsModel {
                     residual,
                 });
             }
-            let f_int0 = self
+            let f_int0 = self.reduction.reduce_vector(&mul(
+                &mats.stiffness,
+                &sub(&self.reduction.offset, &self.p_rest),
+            ));
+            let g = self
                 .reduction
-                .reduce_vector(&mul(&mats.stiffness, &sub(&self.reduction.offset, &self.p_rest)));
-            p = self.solve_at(&k_r, &f_r, &f_int0)?;
+                .reduce_coordinates(&self.solve_at(&k_r, &f_r, &f_int0)?);
+            let f = sub(&g, &q);
+            if norm(&f) <= 1e-14 * norm(&p) {
+                return Ok(SteadyState {
+                    p,
+                    iterations: k,
+                    residual,
+                });
+            }
+            history.push((g.clone(), f.clone()));
+            if history.len() > ANDERSON_DEPTH + 1 {
+                history.remove(0);
+            }
+            q = anderson(&history).unwrap_or(g);
         }
         Err(DnurbsError::Singular {
             detail: format!(
-                "the steady-state iteration with weights as unknowns did not converge in {} iterations (relative residual {residual:e}, tolerance {:e}); the loads are too large for the iteration from the initial shape",
+                "the steady-state iteration with weights as unknowns did not converge in {} \
+                 iterations (relative residual {residual:e}, tolerance {:e}); the loads are too \
+                 large for the iteration from the initial shape",
                 settings.max_iterations, settings.tolerance
             ),
         })
