@@ -16,8 +16,8 @@ use nurbspring_sim::{DofMap, DynamicModel, State, SystemMatrix};
 
 use crate::constraints::Reduction;
 use crate::{
-    Constraints, DnurbsError, DnurbsOptions, Geometry, Loads, Material, Matrices, RestShape,
-    assemble,
+    Constraints, DnurbsError, DnurbsOptions, Geometry, Loads, Material, Matrices, QuadratureChoice,
+    RestShape, assemble,
 };
 
 /// Largest reduced system for which [`DnurbsModel::modes`] uses the dense generalized
@@ -123,6 +123,7 @@ pub struct DnurbsModel {
     pub(crate) material: Material,
     pub(crate) loads: Loads,
     pub(crate) options: DnurbsOptions,
+    pub(crate) quadrature: QuadratureChoice,
     pub(crate) matrices: Matrices,
     pub(crate) reduction: Reduction,
     pub(crate) p0: Vec<f64>,
@@ -148,6 +149,12 @@ impl DnurbsModel {
     ) -> Result<Self, DnurbsError> {
         material.validate(geometry.is_curve())?;
         loads.validate(&geometry)?;
+        options.validate()?;
+        let quadrature = options.quadrature_for(&geometry)?;
+        let options = DnurbsOptions {
+            quadrature_points: Some(quadrature.points),
+            ..options
+        };
         let wad = options.weights_as_dofs;
         let p0 = geometry.coordinates(wad);
         let reduction = Reduction::new(&geometry, constraints, wad, &p0)?;
@@ -180,6 +187,7 @@ impl DnurbsModel {
             material,
             loads,
             options,
+            quadrature,
             matrices,
             reduction,
             p0,
@@ -207,9 +215,14 @@ impl DnurbsModel {
         &self.loads
     }
 
-    /// The options.
+    /// The options, with `quadrature_points` resolved ([`DnurbsModel::quadrature`]).
     pub fn options(&self) -> &DnurbsOptions {
         &self.options
+    }
+
+    /// The Gauss–Legendre rule of the model and its estimated error (docs/math.md §3).
+    pub fn quadrature(&self) -> &QuadratureChoice {
+        &self.quadrature
     }
 
     /// The full, unconstrained matrices at `p(0)`.

@@ -129,7 +129,7 @@ impl RationalStepper {
             weights_as_dofs: wad,
             reduction: model.reduction.clone(),
             p_rest: model.p_rest.clone(),
-            assembler: GeneralAssembler::new(&model.geometry, model.options.quadrature_points, m)?,
+            assembler: GeneralAssembler::new(&model.geometry, model.quadrature.points, m)?,
             restriction: None,
             solver: None,
             dt,

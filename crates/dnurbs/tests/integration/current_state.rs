@@ -36,6 +36,8 @@ fn rational_model(gamma: f64, fixed_point_weights: bool) -> DnurbsModel {
         },
         DnurbsOptions {
             weights_as_dofs: true,
+            // A fixed rule keeps the finite-difference Newton reference cheap.
+            quadrature_points: Some(4),
             ..DnurbsOptions::default()
         },
     )
