@@ -47,6 +47,8 @@ pub struct Simulated {
     pub frames: Vec<(f64, String)>,
     /// The run's summary (steps taken, cancellation).
     pub summary: Option<RunSummary>,
+    /// Warnings about the model (e.g. the quadrature's estimated error).
+    pub warnings: Vec<String>,
 }
 
 /// Where a value of a run came from: a key of the scene or file, or an option.
@@ -205,7 +207,7 @@ pub fn simulate_dnurbs(
             });
         },
     );
-    finish(
+    let (mut simulated, outcome) = finish(
         scene.path.clone(),
         "simulation.dt",
         integrator,
@@ -214,7 +216,9 @@ pub fn simulate_dnurbs(
         trajectory,
         frames,
         result,
-    )
+    )?;
+    simulated.warnings = model.quadrature().warning().into_iter().collect();
+    Ok((simulated, outcome))
 }
 
 /// Runs an MSM (of a scene or an msm.json), writing frames into `out` when given.
@@ -303,6 +307,7 @@ fn finish(
             summary: outcome.as_ref().ok().cloned(),
             trajectory,
             frames: frames.written,
+            warnings: Vec::new(),
         },
         outcome,
     ))
@@ -363,6 +368,8 @@ pub struct Steady {
     pub model: DnurbsModel,
     /// Full generalized coordinates at rest.
     pub p: Vec<f64>,
+    /// Warnings about the model (e.g. the quadrature's estimated error).
+    pub warnings: Vec<String>,
     /// Iterates of the nonlinear solve (1: one linear solve, constant weights).
     pub iterations: usize,
     /// Relative residual of `K(p)(p − p_rest) = f_p(p)` at `p` (0 for constant weights).
@@ -399,6 +406,7 @@ pub fn steady_state(scene: &Scene) -> Result<Steady, Error> {
         })
         .collect();
     Ok(Steady {
+        warnings: model.quadrature().warning().into_iter().collect(),
         model,
         p: solved.p,
         iterations: solved.iterations,

@@ -26,6 +26,9 @@ pub fn run(_ctx: &Context, args: CheckArgs) -> CmdResult {
         return print_json(&report);
     }
     println!("{}: valid", args.scene.display());
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
     let value = serde_json::to_value(&report).unwrap_or_default();
     print_tree(&value, 1);
     Ok(())

@@ -28,6 +28,9 @@ pub fn run(_ctx: &Context, args: ModesArgs) -> CmdResult {
     }
     let scene = Scene::from_path(&args.scene)?;
     let model = scene.build_dnurbs()?;
+    if let Some(w) = model.quadrature().warning() {
+        eprintln!("warning: {w}");
+    }
     let modes = model
         .modes(args.count)
         .map_err(|e| Error::model(&scene.path, None, e))?;

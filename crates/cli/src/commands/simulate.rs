@@ -92,6 +92,9 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
         }
     };
     bar.finish();
+    for w in &simulated.warnings {
+        eprintln!("warning: {w}");
+    }
     write_run(&out, &simulated, pvd)?;
     outcome?;
     if ctx.cancel.load(Ordering::Relaxed) {

@@ -26,6 +26,9 @@ pub struct SteadyArgs {
 pub fn run(_ctx: &Context, args: SteadyArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
     let steady = steady_state(&scene)?;
+    for w in &steady.warnings {
+        eprintln!("warning: {w}");
+    }
     if let Some(dir) = &args.out {
         let out = prepare_out_dir(dir)?;
         write_steady(&out, &steady.model, &steady.p)?;
