@@ -597,8 +597,7 @@ fn check_constraints(
     info: Option<&GeomInfo>,
     p: &mut Problems,
 ) {
-    if c.fixed_point_weights == FixedPointWeights::Held && (!d.weights_as_dofs || c.fixed_weights)
-    {
+    if c.fixed_point_weights == FixedPointWeights::Held && (!d.weights_as_dofs || c.fixed_weights) {
         p.push(
             "constraints.fixed_point_weights",
             "\"held\"".to_string(),
