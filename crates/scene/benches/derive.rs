@@ -2,6 +2,9 @@
 //! → fitted, calibrated and validated MSM (everything `nurbspring derive` computes before it
 //! writes files). `cargo bench -p nurbspring-scene --bench derive`.
 
+// `criterion_group!` generates an undocumented public function.
+#![allow(missing_docs)]
+
 use std::fmt::Write;
 
 use criterion::{Criterion, criterion_group, criterion_main};
