@@ -5,8 +5,10 @@
 //! with `f_int(q) = K_ff q + K_fc p_fixed − (K p_rest)_f` (a stiffness sign) and
 //! `f_ext = f_f`; with linear constraints `p = G q + g` everything is projected by `Gᵀ`.
 //! With constant weights the matrices are constant and `linear_stiffness` is `Some(K_ff)`, so
-//! every integrator of `nurbspring-sim` applies. With weights as unknowns the matrices are
-//! frozen at `p(0)` here (a linearization); the nonlinear motion is [`crate::RationalStepper`]'s.
+//! every integrator of `nurbspring-sim` applies. With weights as unknowns the matrices of the
+//! `DynamicModel` and of [`DnurbsModel::modes`] are frozen at `p(0)` (a linearization); the
+//! nonlinear motion is [`crate::RationalStepper`]'s and the nonlinear steady state is
+//! [`DnurbsModel::steady_state_with`]'s (docs/math.md §3).
 
 use nurbspring_linalg::{
     DenseMatrix, LinalgError, SparseMatrix, SpdSolver, generalized_eigen_sparse_lowest,
