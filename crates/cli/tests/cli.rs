@@ -547,3 +547,96 @@ fn steady_state_sags_and_free_body_is_refused() {
         "{err}"
     );
 }
+
+/// The rational sheet of the scene tests (weights as unknowns, free weights, one ring fixed).
+fn rational_sheet() -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../scene/tests/data/rational_sheet.toml"),
+    )
+    .unwrap()
+}
+
+#[test]
+fn modes_count_the_unknowns_solved_and_say_what_they_linearize() {
+    let dir = tempfile::tempdir().unwrap();
+    let linear = rational_sheet().replace(
+        "fixed_weights = false",
+        "fixed_weights = false\n\
+         [[constraints.linear]]\nterms = [{ point = [1, 1], component = \"z\" }, { point = [3, 3], component = \"z\", coefficient = -1.0 }]\n\
+         [[constraints.linear]]\nterms = [{ point = [2, 2], component = \"w\" }]\nrhs = 1.25",
+    );
+    let p = scene(dir.path(), "linear.toml", &linear);
+    let out = bin()
+        .arg("modes")
+        .arg(&p)
+        .args(["--count", "2"])
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    let check = bin().arg("check").arg("--json").arg(&p).assert().success();
+    let c = json_of(&check.get_output().stdout);
+    let free = c["dnurbs"]["free_dofs"].as_u64().unwrap();
+    assert_eq!(v["free_dofs"].as_u64().unwrap(), free - 2, "{v}");
+    assert_eq!(c["dnurbs"]["reduced_dofs"].as_u64().unwrap(), free - 2);
+    assert!(
+        v["matrices"]
+            .as_str()
+            .unwrap()
+            .contains("linearized at the initial shape"),
+        "{v}"
+    );
+    // A weight in a linear constraint removes the scale ambiguity: no weight is pinned.
+    assert!(c["dnurbs"].get("scale_fixing_weight").is_none(), "{c}");
+}
+
+#[test]
+fn steady_with_weights_as_unknowns_reports_the_nonlinear_solve() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = scene(dir.path(), "sheet.toml", &rational_sheet());
+    let out = bin().arg("steady").arg(&p).assert().success();
+    let v = json_of(&out.get_output().stdout);
+    assert!(
+        v["solve"]["equations"]
+            .as_str()
+            .unwrap()
+            .starts_with("nonlinear")
+    );
+    assert!(v["solve"]["iterations"].as_u64().unwrap() > 1);
+    assert!(v["solve"]["relative_residual"].as_f64().unwrap() <= 1e-13);
+    assert!(v["probes"][0]["displacement"][2].as_f64().unwrap() < 0.0);
+    let check = bin().arg("check").arg(&p).assert().success();
+    let text = String::from_utf8_lossy(&check.get_output().stdout).to_string();
+    assert!(
+        text.contains(
+            "scale_fixing_weight: \"weight of control point [0, 0] (dof 3) held at w = 1\""
+        ),
+        "{text}"
+    );
+}
+
+#[test]
+fn coarse_rule_warns_and_bad_fixed_point_weights_is_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let coarse = rational_sheet().replace(
+        "weights_as_dofs = true",
+        "weights_as_dofs = true\nquadrature_points = 2",
+    );
+    let p = scene(dir.path(), "coarse.toml", &coarse);
+    let out = bin().arg("modes").arg(&p).assert().success();
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        err.contains("warning: dnurbs.quadrature_points = 2"),
+        "{err}"
+    );
+    let bad = rational_sheet().replace(
+        "fixed_weights = false",
+        "fixed_weights = true\nfixed_point_weights = \"held\"",
+    );
+    let p = scene(dir.path(), "bad.toml", &bad);
+    let out = bin().arg("check").arg(&p).assert().code(2);
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        err.contains("bad.toml") && err.contains("constraints.fixed_point_weights = \"held\""),
+        "{err}"
+    );
+}

@@ -25,9 +25,16 @@ use crate::DeriveError;
 /// assert!((x[0][0] - 1.0).abs() < 1e-15 && (x[0][1] - 1.0).abs() < 1e-15);
 /// assert!((x[1][0] - 0.0).abs() < 1e-15 && (x[1][1] - 2.0).abs() < 1e-15);
 /// ```
+///
+/// Ω is the Jacobian at the shape it was built from. With constant weights `J` does not depend
+/// on `p` and `Ω p` is the surface point for every `p`; with weights as unknowns it is not, and
+/// [`Omega::positions`] evaluates `c(p)` itself (docs/math.md §3).
 #[derive(Clone, Debug)]
 pub struct Omega {
     matrix: SparseMatrix,
+    params: Vec<(f64, f64)>,
+    /// The geometry, kept with weights as unknowns to evaluate `c(p)` at any state.
+    rational: Option<Geometry>,
 }
 
 impl Omega {
@@ -39,7 +46,52 @@ impl Omega {
     ) -> Result<Self, DeriveError> {
         Ok(Self {
             matrix: geometry.stacked_jacobian(params, weights_as_dofs)?,
+            params: params.to_vec(),
+            rational: weights_as_dofs.then(|| geometry.clone()),
         })
+    }
+
+    /// The parameters of the points.
+    pub fn params(&self) -> &[(f64, f64)] {
+        &self.params
+    }
+
+    /// The surface points `c(u_a, v_a)` of the shape with full coordinates `p`: `Ω p` with
+    /// constant weights (exact there), `c(p)` evaluated from the control points and weights in
+    /// `p` with weights as unknowns, where `Ω p` is only the first-order estimate
+    /// `J(p(0)) p` (docs/math.md §3).
+    pub fn positions(&self, p: &[f64]) -> Result<Vec<[f64; 3]>, DeriveError> {
+        let mut out = vec![0.0; self.matrix.nrows()];
+        self.positions_into(p, &mut out)?;
+        Ok(out.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// [`Omega::positions`] into a flat buffer of `3 N_points` values.
+    pub fn positions_into(&self, p: &[f64], out: &mut [f64]) -> Result<(), DeriveError> {
+        match &self.rational {
+            None => {
+                if p.len() != self.matrix.ncols() {
+                    return Err(DeriveError::Dnurbs(
+                        nurbspring_dnurbs::DnurbsError::DimensionMismatch {
+                            what: "generalized coordinates p",
+                            expected: self.matrix.ncols(),
+                            found: p.len(),
+                        },
+                    ));
+                }
+                self.apply_into(p, out);
+            }
+            Some(geometry) => {
+                let shape = geometry.with_coordinates(p, true)?;
+                for (a, &(u, v)) in self.params.iter().enumerate() {
+                    let x = shape
+                        .point(u, v)
+                        .map_err(nurbspring_dnurbs::DnurbsError::from)?;
+                    out[3 * a..3 * a + 3].copy_from_slice(&x);
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The matrix.
@@ -52,8 +104,9 @@ impl Omega {
         self.matrix.nrows() / 3
     }
 
-    /// `Ω y` per point: positions from `p` (eq. 11), velocities from `ṗ` (eq. 18),
-    /// displacements from `Δp`.
+    /// `Ω y` per point: velocities from `ṗ` at the initial shape (eq. 18), displacements
+    /// from `Δp`, positions from `p` with constant weights (use [`Omega::positions`] for the
+    /// points of a state).
     pub fn apply(&self, y: &[f64]) -> Vec<[f64; 3]> {
         let mut out = vec![0.0; self.matrix.nrows()];
         self.apply_into(y, &mut out);

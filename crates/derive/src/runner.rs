@@ -10,7 +10,8 @@ use crate::{DeriveError, Omega, Trajectory};
 /// A model to run, with the points it is watched at.
 #[derive(Clone, Copy)]
 pub enum Watched<'a> {
-    /// A D-NURBS; its probes are the points `Ω_probes p` (paper eq. (11) at the probes).
+    /// A D-NURBS; its probes are the surface points `c(p(t))` at the probe parameters
+    /// ([`Omega::positions`]: `Ω_probes p`, paper eq. (11), with constant weights).
     Dnurbs {
         /// The model.
         model: &'a DnurbsModel,
@@ -73,16 +74,23 @@ pub fn record(
     };
     let outcome = match watched {
         Watched::Dnurbs { model, probes } => {
+            let mut failed = None;
             let mut observer = |s: &Sample<'_>| {
-                if s.step.is_multiple_of(every) {
+                if s.step.is_multiple_of(every) && failed.is_none() {
                     let p = model.full_coordinates(s.q);
-                    probes.apply_into(&p, &mut points);
-                    keep(s, &p, &points, &mut traj);
+                    match probes.positions_into(&p, &mut points) {
+                        Ok(()) => keep(s, &p, &points, &mut traj),
+                        Err(e) => failed = Some(e),
+                    }
                 }
             };
-            model
+            let outcome = model
                 .simulate(initial, opts, &mut observer)
-                .map_err(DeriveError::from)
+                .map_err(DeriveError::from);
+            match failed {
+                Some(e) => Err(e),
+                None => outcome,
+            }
         }
         Watched::Msm { model, nodes } => {
             let mut observer = |s: &Sample<'_>| {

@@ -115,20 +115,25 @@ enum AssemblerKind {
 
 impl Assembler {
     /// Element layout and pattern for `geometry`'s knots: scalar `N × N` with constant weights,
-    /// `4N × 4N` with `options.weights_as_dofs`.
+    /// `4N × 4N` with `options.weights_as_dofs`. Without `quadrature_points` the rule is
+    /// [`DnurbsOptions::quadrature_for`] of `geometry`; [`Assembler::options`] holds the
+    /// resolved count.
     pub fn new(geometry: &Geometry, options: &DnurbsOptions) -> Result<Self, DnurbsError> {
         options.validate()?;
+        let points = match options.quadrature_points {
+            Some(points) => points,
+            None => options.quadrature_for(geometry)?.points,
+        };
         let kind = if options.weights_as_dofs {
-            AssemblerKind::General(GeneralAssembler::new(
-                geometry,
-                options.quadrature_points,
-                4,
-            )?)
+            AssemblerKind::General(GeneralAssembler::new(geometry, points, 4)?)
         } else {
-            AssemblerKind::Scalar(ScalarAssembler::new(geometry, options.quadrature_points)?)
+            AssemblerKind::Scalar(ScalarAssembler::new(geometry, points)?)
         };
         Ok(Self {
-            options: options.clone(),
+            options: DnurbsOptions {
+                quadrature_points: Some(points),
+                ..options.clone()
+            },
             knots: knots_of(geometry),
             kind,
         })

@@ -31,6 +31,10 @@ pub struct Constraints {
     pub fixed_rings: usize,
     /// With weights as unknowns: keep every weight at its initial value.
     pub fixed_weights: bool,
+    /// With weights as unknowns and `fixed_weights = false`: keep the weights of the fixed
+    /// control points at their initial values too (default `false`: a fixed point fixes its
+    /// x, y, z only and its weight stays free; docs/math.md §4).
+    pub fixed_point_weights: bool,
     /// General linear constraints `A p = b` on the full generalized coordinates.
     pub linear: Vec<LinearConstraint>,
 }
@@ -64,8 +68,8 @@ pub(crate) struct Reduction {
 impl Reduction {
     /// Resolves `constraints` for `geometry` with initial coordinates `p0` (docs/math.md §4).
     ///
-    /// With weights as unknowns and no weight fixed (by `fixed_weights` or a linear constraint
-    /// on a weight), scaling every weight by the same factor leaves the surface unchanged, so
+    /// With weights as unknowns and no weight fixed (by `fixed_weights`, `fixed_point_weights`
+    /// with at least one fixed point, or a linear constraint on a weight), scaling every weight by the same factor leaves the surface unchanged, so
     /// `M` and `K` are singular along that direction. The weight of the first fixed control
     /// point (or of point 0) is then pinned at its initial value: a gauge choice that leaves
     /// the motion of the surface unchanged and makes every system solved SPD.
@@ -125,6 +129,8 @@ impl Reduction {
         if m == 4 {
             if constraints.fixed_weights {
                 fixed.extend((0..n).map(|k| 4 * k + 3));
+            } else if constraints.fixed_point_weights && !fixed_points.is_empty() {
+                fixed.extend(fixed_points.iter().map(|&k| 4 * k + 3));
             } else {
                 let weight_constrained = constraints
                     .linear

@@ -66,7 +66,12 @@ pub use error::DnurbsError;
 pub use geometry::{Geometry, outer_ring_points};
 pub use loads::{Loads, PointLoad};
 pub use material::Material;
-pub use model::{DENSE_MODES_LIMIT, DnurbsModel, Modes};
-pub use options::{DnurbsOptions, Integration, MAX_QUADRATURE_POINTS, RestShape};
+pub use model::{
+    ANDERSON_DEPTH, DENSE_MODES_LIMIT, DnurbsModel, Modes, SteadySettings, SteadyState,
+};
+pub use options::{
+    DnurbsOptions, Integration, MAX_QUADRATURE_POINTS, QUADRATURE_TOLERANCE, QUADRATURE_WARNING,
+    QuadratureChoice, RestShape,
+};
 pub use rational::{DEFAULT_MIN_WEIGHT_RATIO, RationalStepper};
 pub use run::{integrator_problem, names as integrator_names};

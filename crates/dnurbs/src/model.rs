@@ -5,8 +5,10 @@
 //! with `f_int(q) = K_ff q + K_fc p_fixed − (K p_rest)_f` (a stiffness sign) and
 //! `f_ext = f_f`; with linear constraints `p = G q + g` everything is projected by `Gᵀ`.
 //! With constant weights the matrices are constant and `linear_stiffness` is `Some(K_ff)`, so
-//! every integrator of `nurbspring-sim` applies. With weights as unknowns the matrices are
-//! frozen at `p(0)` here (a linearization); the nonlinear motion is [`crate::RationalStepper`]'s.
+//! every integrator of `nurbspring-sim` applies. With weights as unknowns the matrices of the
+//! `DynamicModel` and of [`DnurbsModel::modes`] are frozen at `p(0)` (a linearization); the
+//! nonlinear motion is [`crate::RationalStepper`]'s and the nonlinear steady state is
+//! [`DnurbsModel::steady_state_with`]'s (docs/math.md §3).
 
 use nurbspring_linalg::{
     DenseMatrix, LinalgError, SparseMatrix, SpdSolver, generalized_eigen_sparse_lowest,
@@ -16,8 +18,8 @@ use nurbspring_sim::{DofMap, DynamicModel, State, SystemMatrix};
 
 use crate::constraints::Reduction;
 use crate::{
-    Constraints, DnurbsError, DnurbsOptions, Geometry, Loads, Material, Matrices, RestShape,
-    assemble,
+    Constraints, DnurbsError, DnurbsOptions, Geometry, Loads, Material, Matrices, QuadratureChoice,
+    RestShape, assemble,
 };
 
 /// Largest reduced system for which [`DnurbsModel::modes`] uses the dense generalized
@@ -49,6 +51,72 @@ impl Modes {
     }
 }
 
+/// Settings of the nonlinear steady-state iteration ([`DnurbsModel::steady_state_with`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SteadySettings {
+    /// Relative residual at which the iteration stops (default 1e-13).
+    pub tolerance: f64,
+    /// Iteration limit (default 200).
+    pub max_iterations: usize,
+}
+
+impl Default for SteadySettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-13,
+            max_iterations: 200,
+        }
+    }
+}
+
+/// The result of [`DnurbsModel::steady_state_with`].
+#[derive(Clone, Debug)]
+pub struct SteadyState {
+    /// The full generalized coordinates at rest.
+    pub p: Vec<f64>,
+    /// Iterates assembled (1 for constant weights).
+    pub iterations: usize,
+    /// Relative residual of the equilibrium at `p` (0 for constant weights).
+    pub residual: f64,
+}
+
+/// Iterates mixed by [`DnurbsModel::steady_state_with`].
+pub const ANDERSON_DEPTH: usize = 5;
+
+/// The Anderson update `G_k − ΔG γ` with `γ` minimizing `|F_k − ΔF γ|` over the differences of
+/// the history `(G_j, F_j = G_j − q_j)`; `None` with fewer than two entries or a singular fit.
+fn anderson(history: &[(Vec<f64>, Vec<f64>)]) -> Option<Vec<f64>> {
+    let m = history.len().checked_sub(1).filter(|&m| m > 0)?;
+    let (g_k, f_k) = history.last()?;
+    let n = f_k.len();
+    let df = DenseMatrix::from_fn(n, m, |i, j| history[j + 1].1[i] - history[j].1[i]);
+    let gamma = nurbspring_linalg::least_squares(&df, f_k).ok()?;
+    if gamma.iter().any(|g| !g.is_finite()) {
+        return None;
+    }
+    let mut out = g_k.clone();
+    for (j, &c) in gamma.iter().enumerate() {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o -= c * (history[j + 1].0[i] - history[j].0[i]);
+        }
+    }
+    Some(out)
+}
+
+fn sub(a: &[f64], b: &[f64]) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x - y).collect()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    a.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+fn mul(a: &SparseMatrix, x: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; a.nrows()];
+    a.mul_vec(x, &mut out);
+    out
+}
+
 /// A D-NURBS surface or curve with material, loads and constraints, reduced to its free dofs
 /// (docs/math.md §3–4). Implements [`DynamicModel`].
 #[derive(Clone, Debug)]
@@ -57,6 +125,7 @@ pub struct DnurbsModel {
     pub(crate) material: Material,
     pub(crate) loads: Loads,
     pub(crate) options: DnurbsOptions,
+    pub(crate) quadrature: QuadratureChoice,
     pub(crate) matrices: Matrices,
     pub(crate) reduction: Reduction,
     pub(crate) p0: Vec<f64>,
@@ -82,6 +151,12 @@ impl DnurbsModel {
     ) -> Result<Self, DnurbsError> {
         material.validate(geometry.is_curve())?;
         loads.validate(&geometry)?;
+        options.validate()?;
+        let quadrature = options.quadrature_for(&geometry)?;
+        let options = DnurbsOptions {
+            quadrature_points: Some(quadrature.points),
+            ..options
+        };
         let wad = options.weights_as_dofs;
         let p0 = geometry.coordinates(wad);
         let reduction = Reduction::new(&geometry, constraints, wad, &p0)?;
@@ -114,6 +189,7 @@ impl DnurbsModel {
             material,
             loads,
             options,
+            quadrature,
             matrices,
             reduction,
             p0,
@@ -141,9 +217,14 @@ impl DnurbsModel {
         &self.loads
     }
 
-    /// The options.
+    /// The options, with `quadrature_points` resolved ([`DnurbsModel::quadrature`]).
     pub fn options(&self) -> &DnurbsOptions {
         &self.options
+    }
+
+    /// The Gauss–Legendre rule of the model and its estimated error (docs/math.md §3).
+    pub fn quadrature(&self) -> &QuadratureChoice {
+        &self.quadrature
     }
 
     /// The full, unconstrained matrices at `p(0)`.
@@ -284,16 +365,134 @@ impl DnurbsModel {
         0.5 * self.matrices.stiffness.quadratic_form(&d)
     }
 
-    /// Steady state (paper eq. (8), docs/math.md §3): the full `p` solving
-    /// `K_ff (p_f − p_rest,f) = f_f − K_fc (p_c − p_rest,c)` on the free dofs (projected by `Gᵀ`
-    /// with linear constraints). Returns [`DnurbsError::Singular`] when the reduced stiffness is
-    /// singular, e.g. a free-floating body (nothing fixed: rigid translations cost no energy).
+    /// Steady state (paper eq. (8), docs/math.md §3): the full `p` at rest, solving
+    /// `K(p) (p − p_rest) = f_p(p)` on the free dofs (projected by `Gᵀ` with linear
+    /// constraints).
+    ///
+    /// With constant weights K and f are constant and this is one linear solve,
+    /// [`DnurbsModel::linearized_steady_state`]. With weights as unknowns K and f depend on the
+    /// shape and the nonlinear equilibrium is found by the fixed-point iteration of
+    /// [`DnurbsModel::steady_state_with`] started from the linearized solution.
+    ///
+    /// Returns [`DnurbsError::Singular`] when the reduced stiffness is singular, e.g. a
+    /// free-floating body (nothing fixed: rigid translations cost no energy).
     pub fn steady_state(&self) -> Result<Vec<f64>, DnurbsError> {
+        if self.options.weights_as_dofs {
+            Ok(self.steady_state_with(SteadySettings::default())?.p)
+        } else {
+            self.linearized_steady_state()
+        }
+    }
+
+    /// The linear steady state with the matrices of the initial shape: `K(p(0)) (p − p_rest) =
+    /// f_p(p(0))` on the free dofs. With constant weights it is the steady state; with weights
+    /// as unknowns it is the first iterate of [`DnurbsModel::steady_state_with`].
+    pub fn linearized_steady_state(&self) -> Result<Vec<f64>, DnurbsError> {
+        self.solve_at(&self.stiffness_r, &self.f_ext, &self.f_int0)
+    }
+
+    /// The nonlinear steady state with weights as unknowns (docs/math.md §3): the fixed point
+    /// of `G(p) = p⁺` with `K(p) (p⁺ − p_rest) = f_p(p)` on the free dofs, M, K and f
+    /// assembled at each iterate, started from the linearized solution and accelerated by
+    /// Anderson mixing over the last [`ANDERSON_DEPTH`] iterates. It stops when the relative
+    /// residual `|Pᵀ (f_p(p) − K(p)(p − p_rest))| / (|Pᵀ f_p(p)| + |Pᵀ K(p)(p − p_rest)|)` is at
+    /// most `settings.tolerance`, or when the update falls to round-off (`|G(p) − p| ≤ 10⁻¹⁴ |p|`);
+    /// it fails with [`DnurbsError::Singular`] when neither happens within
+    /// `settings.max_iterations` or a weight becomes non-positive. With constant weights the
+    /// first iterate is exact (`iterations = 1`).
+    pub fn steady_state_with(&self, settings: SteadySettings) -> Result<SteadyState, DnurbsError> {
+        let p1 = self.linearized_steady_state()?;
+        let wad = self.options.weights_as_dofs;
+        if !wad || self.reduction.n_q == 0 {
+            return Ok(SteadyState {
+                p: p1,
+                iterations: 1,
+                residual: 0.0,
+            });
+        }
+        let assembler = crate::Assembler::new(&self.geometry, &self.options)?;
+        let mut q = self.reduction.reduce_coordinates(&p1);
+        let mut residual = f64::INFINITY;
+        // Anderson history: (G(q_j), G(q_j) − q_j).
+        let mut history: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+        for k in 1..=settings.max_iterations {
+            let p = self.reduction.to_full(&q);
+            if let Some(d) = (0..p.len() / 4).map(|i| 4 * i + 3).find(|&d| p[d] <= 0.0) {
+                return Err(DnurbsError::Singular {
+                    detail: format!(
+                        "the steady-state iteration reached weight {:e} of control point {} \
+                         (iteration {k}); the nonlinear equilibrium with weights as unknowns is \
+                         not reachable from the initial shape under these loads (hold weights \
+                         with constraints.fixed_weights or constraints.fixed_point_weights)",
+                        p[d],
+                        d / 4
+                    ),
+                });
+            }
+            let geo = self.geometry.with_coordinates(&p, true)?;
+            let mats = assembler.assemble(&geo, &self.material, &self.loads)?;
+            let k_r = self.reduction.reduce_matrix(&mats.stiffness)?;
+            let f_r = self.reduction.reduce_vector(&mats.force);
+            let elastic = self
+                .reduction
+                .reduce_vector(&mul(&mats.stiffness, &sub(&p, &self.p_rest)));
+            let scale = norm(&f_r) + norm(&elastic);
+            residual = if scale > 0.0 {
+                norm(&sub(&f_r, &elastic)) / scale
+            } else {
+                0.0
+            };
+            if residual <= settings.tolerance {
+                return Ok(SteadyState {
+                    p,
+                    iterations: k,
+                    residual,
+                });
+            }
+            let f_int0 = self.reduction.reduce_vector(&mul(
+                &mats.stiffness,
+                &sub(&self.reduction.offset, &self.p_rest),
+            ));
+            let g = self
+                .reduction
+                .reduce_coordinates(&self.solve_at(&k_r, &f_r, &f_int0)?);
+            let f = sub(&g, &q);
+            if norm(&f) <= 1e-14 * norm(&p) {
+                return Ok(SteadyState {
+                    p,
+                    iterations: k,
+                    residual,
+                });
+            }
+            history.push((g.clone(), f.clone()));
+            if history.len() > ANDERSON_DEPTH + 1 {
+                history.remove(0);
+            }
+            q = anderson(&history).unwrap_or(g);
+        }
+        Err(DnurbsError::Singular {
+            detail: format!(
+                "the steady-state iteration with weights as unknowns did not converge in {} \
+                 iterations (relative residual {residual:e}, tolerance {:e}); the loads are too \
+                 large for the iteration from the initial shape",
+                settings.max_iterations, settings.tolerance
+            ),
+        })
+    }
+
+    /// Solves `k_r q = f − f_int0` with the singularity checks of [`DnurbsModel::steady_state`]
+    /// and returns the full `p`.
+    fn solve_at(
+        &self,
+        k_r: &SparseMatrix,
+        f_ext: &[f64],
+        f_int0: &[f64],
+    ) -> Result<Vec<f64>, DnurbsError> {
         let n = self.reduction.n_q;
         if n == 0 {
             return Ok(self.reduction.to_full(&[]));
         }
-        if self.stiffness_r.frobenius_norm() == 0.0 {
+        if k_r.frobenius_norm() == 0.0 {
             return Err(DnurbsError::Singular {
                 detail: "the stiffness matrix is zero: every alpha and beta coefficient is 0"
                     .into(),
@@ -323,7 +522,7 @@ impl DnurbsModel {
                 });
             }
         }
-        let solver = SpdSolver::new(&self.stiffness_r).map_err(|e| match e {
+        let solver = SpdSolver::new(k_r).map_err(|e| match e {
             LinalgError::NotPositiveDefinite { detail } => DnurbsError::Singular {
                 detail: format!(
                     "the stiffness on the {n} free dofs is not positive definite ({detail}); \
@@ -338,15 +537,9 @@ impl DnurbsModel {
             .map(|i| 1.0 + ((i * 7919) % 13) as f64 / 13.0)
             .collect();
         let mut ky = vec![0.0; n];
-        self.stiffness_r.mul_vec(&y, &mut ky);
+        k_r.mul_vec(&y, &mut ky);
         let x = solver.solve(&ky);
-        let rel = x
-            .iter()
-            .zip(&y)
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum::<f64>()
-            .sqrt()
-            / y.iter().map(|a| a * a).sum::<f64>().sqrt();
+        let rel = norm(&sub(&x, &y)) / norm(&y);
         if rel.is_nan() || rel >= 1e-6 {
             return Err(DnurbsError::Singular {
                 detail: format!(
@@ -355,13 +548,7 @@ impl DnurbsModel {
                 ),
             });
         }
-        let rhs: Vec<f64> = self
-            .f_ext
-            .iter()
-            .zip(&self.f_int0)
-            .map(|(f, b)| f - b)
-            .collect();
-        let q = solver.solve(&rhs);
+        let q = solver.solve(&sub(f_ext, f_int0));
         if q.iter().any(|v| !v.is_finite()) {
             return Err(DnurbsError::Singular {
                 detail: "the steady-state solve produced non-finite values".into(),

@@ -8,6 +8,7 @@
 //! `(4M + 2ΔtD + 4Δt²K) pᵗ⁺ᐞᵗ = 4Δt² (f_p + K p_rest) + 8M pᵗ − (2M − 2ΔtD) pᵗ⁻ᐞᵗ − 2 ∫∫ μ Jᵀ cᵗ⁻ᐞᵗ`
 //!
 //! with `cᵗ⁻ᐞᵗ` the surface of the previous step, then projects the weights to `w ≥ w_min`.
+//! The reported velocity at `t + Δt` is `(3pᵗ⁺ᐞᵗ − 4pᵗ + pᵗ⁻ᐞᵗ)/(2Δt)`.
 //! With constant weights `∫∫ μ Jᵀ cᵗ⁻ᐞᵗ = M pᵗ⁻ᐞᵗ` and this is Terzopoulos–Qin's scheme.
 //! Constraints are applied as in the model (fixed dofs at their initial values, linear
 //! constraints through `p = G q + g`); the state is on the model's reduced coordinates.
@@ -128,7 +129,7 @@ impl RationalStepper {
             weights_as_dofs: wad,
             reduction: model.reduction.clone(),
             p_rest: model.p_rest.clone(),
-            assembler: GeneralAssembler::new(&model.geometry, model.options.quadrature_points, m)?,
+            assembler: GeneralAssembler::new(&model.geometry, model.quadrature.points, m)?,
             restriction: None,
             solver: None,
             dt,
@@ -168,7 +169,8 @@ impl RationalStepper {
         self.steps
     }
 
-    /// The current state on the reduced coordinates; `v` is `(pᵗ⁺ᐞᵗ − pᵗ⁻ᐞᵗ)/(2Δt)` after a step.
+    /// The current state on the reduced coordinates; after a step `v` is the velocity at the
+    /// state's own time `t`, `(3pᵗ − 4pᵗ⁻ᐞᵗ + pᵗ⁻²ᐞᵗ)/(2Δt)`.
     pub fn state(&self) -> &State {
         &self.state
     }
@@ -293,10 +295,12 @@ impl RationalStepper {
                 time,
             });
         }
+        // The velocity at the new time t + Δt: the second-order backward difference
+        // (3pᵗ⁺ᐞᵗ − 4pᵗ + pᵗ⁻ᐞᵗ)/(2Δt) (docs/math.md §3).
         let v_full: Vec<f64> = p_new
             .iter()
-            .zip(&self.p_prev)
-            .map(|(a, b)| (a - b) / (2.0 * dt))
+            .zip(self.p_curr.iter().zip(&self.p_prev))
+            .map(|(a, (b, c))| (3.0 * a - 4.0 * b + c) / (2.0 * dt))
             .collect();
         self.state.v = self.reduction.reduce_vector(&v_full);
         self.state.q = q_new;

@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering;
 
 use nurbspring_sim::{IntegratorKind, Observer, RunOptions, RunSummary, Sample, State, simulate};
 
-use crate::{DnurbsError, DnurbsModel, DnurbsOptions, Material, RationalStepper};
+use crate::{Assembler, DnurbsError, DnurbsModel, DnurbsOptions, Material, RationalStepper};
 
 /// Why `integrator` cannot run a D-NURBS with this material and these options; `None` when it
 /// can. The one place these rules live: [`DnurbsModel::simulate`] and the scene checks use it.
@@ -19,6 +19,14 @@ pub fn integrator_problem(
         return Some(format!(
             "not an integrator of the D-NURBS model; expected one of {}",
             names(&DnurbsModel::INTEGRATORS)
+        ));
+    }
+    if options.weights_as_dofs && integrator != IntegratorKind::TerzopoulosQin {
+        return Some(format!(
+            "with weights as unknowns (dnurbs.weights_as_dofs = true) M, D and K change with the \
+             shape and the one scheme is the weights-as-unknowns Terzopoulos–Qin step; expected \
+             {}",
+            IntegratorKind::TerzopoulosQin.name()
         ));
     }
     if integrator == IntegratorKind::Modal {
@@ -60,9 +68,10 @@ impl DnurbsModel {
     ///
     /// With constant weights this is [`nurbspring_sim::simulate`] with `opts.integrator`. With
     /// weights as unknowns the matrices change with the shape, and the one scheme is the
-    /// weights-as-unknowns Terzopoulos–Qin step of [`RationalStepper`] (`opts.integrator` is
-    /// not used); its samples carry the kinetic energy `½ ṗᵀ M(p(0)) ṗ` and the elastic
-    /// energy `½ (p − p_rest)ᵀ K(p(0)) (p − p_rest)` with the matrices of the initial shape.
+    /// weights-as-unknowns Terzopoulos–Qin step of [`RationalStepper`] (any other integrator is
+    /// refused by [`integrator_problem`]); its samples carry the energies of the current shape,
+    /// `½ ṗᵀ M(p) ṗ` and `½ (p − p_rest)ᵀ K(p) (p − p_rest)`, with M and K assembled at the
+    /// sample's own `p` and the velocity at the sample's own time (docs/math.md §3).
     /// The run stops after the current step when `opts.cancel` is set.
     pub fn simulate(
         &self,
@@ -81,14 +90,9 @@ impl DnurbsModel {
             return Ok(simulate(self, initial, opts, observer)?);
         }
         opts.validate(initial.t)?;
-        let energy = |q: &[f64], v: &[f64]| {
-            let vf = self.full_velocity(v);
-            (
-                0.5 * self.matrices().mass.quadratic_form(&vf),
-                self.elastic_energy(&self.full_coordinates(q)),
-            )
-        };
-        let (kinetic, potential) = energy(&initial.q, &initial.v);
+        let assembler = Assembler::new(&self.geometry, &self.options)?;
+        let energy = |q: &[f64], v: &[f64]| self.energies_with(&assembler, q, v);
+        let (kinetic, potential) = energy(&initial.q, &initial.v)?;
         observer.observe(&Sample {
             step: 0,
             t: initial.t,
@@ -117,7 +121,7 @@ impl DnurbsModel {
             }
             stepper.step()?;
             let s = stepper.state();
-            let (kinetic, potential) = energy(&s.q, &s.v);
+            let (kinetic, potential) = energy(&s.q, &s.v)?;
             summary.steps += 1;
             summary.t_final = s.t;
             observer.observe(&Sample {
@@ -130,5 +134,40 @@ impl DnurbsModel {
             });
         }
         Ok(summary)
+    }
+}
+
+impl DnurbsModel {
+    /// The kinetic energy `½ ṗᵀ M(p) ṗ` and the elastic energy `½ (p − p_rest)ᵀ K(p) (p − p_rest)`
+    /// of the reduced state `(q, v)`, with M and K of the shape `p = P q + o` itself
+    /// (docs/math.md §3). With constant weights M and K are those of the model.
+    pub fn energies(&self, q: &[f64], v: &[f64]) -> Result<(f64, f64), DnurbsError> {
+        if !self.options.weights_as_dofs {
+            let vf = self.full_velocity(v);
+            return Ok((
+                0.5 * self.matrices.mass.quadratic_form(&vf),
+                self.elastic_energy(&self.full_coordinates(q)),
+            ));
+        }
+        self.energies_with(&Assembler::new(&self.geometry, &self.options)?, q, v)
+    }
+
+    fn energies_with(
+        &self,
+        assembler: &Assembler,
+        q: &[f64],
+        v: &[f64],
+    ) -> Result<(f64, f64), DnurbsError> {
+        let p = self.full_coordinates(q);
+        let vf = self.full_velocity(v);
+        let geometry = self
+            .geometry
+            .with_coordinates(&p, self.options.weights_as_dofs)?;
+        let m = assembler.assemble(&geometry, &self.material, &self.loads)?;
+        let d: Vec<f64> = p.iter().zip(&self.p_rest).map(|(a, b)| a - b).collect();
+        Ok((
+            0.5 * m.mass.quadratic_form(&vf),
+            0.5 * m.stiffness.quadratic_form(&d),
+        ))
     }
 }

@@ -179,6 +179,7 @@ impl Scene {
             fixed_points: c.fixed.iter().map(|p| self.point_index(p)).collect(),
             fixed_rings: c.fixed_rings,
             fixed_weights: c.fixed_weights,
+            fixed_point_weights: c.fixed_point_weights == crate::spec::FixedPointWeights::Held,
             linear: c
                 .linear
                 .iter()

@@ -58,7 +58,13 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
     ("loads.point", &["u", "v", "force"]),
     (
         "constraints",
-        &["fixed_rings", "fixed", "fixed_weights", "linear"],
+        &[
+            "fixed_rings",
+            "fixed",
+            "fixed_weights",
+            "fixed_point_weights",
+            "linear",
+        ],
     ),
     ("constraints.linear", &["terms", "rhs"]),
     (

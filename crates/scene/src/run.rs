@@ -47,6 +47,8 @@ pub struct Simulated {
     pub frames: Vec<(f64, String)>,
     /// The run's summary (steps taken, cancellation).
     pub summary: Option<RunSummary>,
+    /// Warnings about the model (e.g. the quadrature's estimated error).
+    pub warnings: Vec<String>,
 }
 
 /// Where a value of a run came from: a key of the scene or file, or an option.
@@ -205,7 +207,7 @@ pub fn simulate_dnurbs(
             });
         },
     );
-    finish(
+    let (mut simulated, outcome) = finish(
         scene.path.clone(),
         "simulation.dt",
         integrator,
@@ -214,7 +216,9 @@ pub fn simulate_dnurbs(
         trajectory,
         frames,
         result,
-    )
+    )?;
+    simulated.warnings = model.quadrature().warning().into_iter().collect();
+    Ok((simulated, outcome))
 }
 
 /// Runs an MSM (of a scene or an msm.json), writing frames into `out` when given.
@@ -303,6 +307,7 @@ fn finish(
             summary: outcome.as_ref().ok().cloned(),
             trajectory,
             frames: frames.written,
+            warnings: Vec::new(),
         },
         outcome,
     ))
@@ -340,4 +345,72 @@ pub fn write_run(out: &Path, run: &Simulated, pvd: &str) -> Result<(), Error> {
     }
     series.write(out.join(pvd))?;
     Ok(())
+}
+
+/// One probe of [`steady_state`]: its parameters, the surface point at rest and its
+/// displacement from the initial surface.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SteadyProbe {
+    /// Parameter u.
+    pub u: f64,
+    /// Parameter v.
+    pub v: f64,
+    /// `c(p_steady)` at `(u, v)`.
+    pub point: [f64; 3],
+    /// `c(p_steady) − c(p(0))` at `(u, v)`.
+    pub displacement: [f64; 3],
+}
+
+/// The scene's D-NURBS at rest (paper eq. (8), docs/math.md §3).
+#[derive(Clone, Debug)]
+pub struct Steady {
+    /// The model.
+    pub model: DnurbsModel,
+    /// Full generalized coordinates at rest.
+    pub p: Vec<f64>,
+    /// Warnings about the model (e.g. the quadrature's estimated error).
+    pub warnings: Vec<String>,
+    /// Iterates of the nonlinear solve (1: one linear solve, constant weights).
+    pub iterations: usize,
+    /// Relative residual of `K(p)(p − p_rest) = f_p(p)` at `p` (0 for constant weights).
+    pub residual: f64,
+    /// The probes, the centre of the parameter domain first.
+    pub probes: Vec<SteadyProbe>,
+}
+
+/// Solves the steady state of the scene's D-NURBS: one linear solve with constant weights, the
+/// nonlinear equilibrium `K(p)(p − p_rest) = f_p(p)` with weights as unknowns
+/// ([`DnurbsModel::steady_state_with`]); probe points are the surface evaluated at that state.
+pub fn steady_state(scene: &Scene) -> Result<Steady, Error> {
+    let model = scene.build_dnurbs()?;
+    let solved = model
+        .steady_state_with(nurbspring_dnurbs::SteadySettings::default())
+        .map_err(|e| Error::model(&scene.path, None, e))?;
+    let params = scene.probe_params()?;
+    let omega = Omega::new(model.geometry(), &params, scene.dnurbs.weights_as_dofs)
+        .map_err(|e| Error::model(&scene.path, Some("simulation.probes"), e))?;
+    let points = |p: &[f64]| {
+        omega
+            .positions(p)
+            .map_err(|e| Error::model(&scene.path, None, e))
+    };
+    let (now, before) = (points(&solved.p)?, points(model.p0())?);
+    let probes = params
+        .iter()
+        .zip(now.iter().zip(&before))
+        .map(|(&(u, v), (at, b))| SteadyProbe {
+            u,
+            v,
+            point: *at,
+            displacement: [at[0] - b[0], at[1] - b[1], at[2] - b[2]],
+        })
+        .collect();
+    Ok(Steady {
+        warnings: model.quadrature().warning().into_iter().collect(),
+        model,
+        p: solved.p,
+        iterations: solved.iterations,
+        residual: solved.residual,
+        probes,
+    })
 }

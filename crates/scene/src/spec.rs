@@ -155,6 +155,9 @@ pub struct ConstraintsSpec {
     pub fixed: Vec<Vec<usize>>,
     /// Hold the weights fixed when weights are unknowns (default true).
     pub fixed_weights: bool,
+    /// With weights as unknowns and `fixed_weights = false`: whether the weights of the fixed
+    /// control points are `free` (default) or `held` at their initial values.
+    pub fixed_point_weights: FixedPointWeights,
     /// General constraints `A p = b`, one row each (`[[constraints.linear]]`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub linear: Vec<LinearConstraintSpec>,
@@ -166,7 +169,29 @@ impl Default for ConstraintsSpec {
             fixed_rings: 0,
             fixed: Vec::new(),
             fixed_weights: true,
+            fixed_point_weights: FixedPointWeights::Free,
             linear: Vec::new(),
+        }
+    }
+}
+
+/// The weights of fixed control points when weights are unknowns (docs/math.md §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FixedPointWeights {
+    /// A fixed point fixes its x, y, z; its weight moves (the surface near it can still move).
+    #[default]
+    Free,
+    /// A fixed point fixes its weight too (with its neighbours fixed, the boundary stays put).
+    Held,
+}
+
+impl FixedPointWeights {
+    /// "free" or "held", as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            FixedPointWeights::Free => "free",
+            FixedPointWeights::Held => "held",
         }
     }
 }

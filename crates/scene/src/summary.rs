@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use nurbspring_dnurbs::Geometry;
+use nurbspring_dnurbs::{DnurbsModel, Geometry, QuadratureChoice};
 use nurbspring_sim::IntegratorKind;
 use serde::Serialize;
 
@@ -36,8 +36,20 @@ pub struct DnurbsSummary {
     pub fixed_dofs: usize,
     /// Free dofs.
     pub free_dofs: usize,
+    /// Unknowns of every system solved: the free dofs less one per independent linear
+    /// constraint (equal to `free_dofs` without linear constraints).
+    pub reduced_dofs: usize,
     /// Fixed control points.
     pub fixed_control_points: usize,
+    /// With free weights: `free` or `held`, the weights of the fixed control points.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fixed_point_weights: Option<&'static str>,
+    /// With free weights and none held: the weight fixed to remove the common scale of the
+    /// weights (docs/math.md §4).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale_fixing_weight: Option<String>,
+    /// The Gauss–Legendre rule and its estimated relative error.
+    pub quadrature: QuadratureChoice,
     /// Non-zeros of K.
     pub stiffness_nonzeros: usize,
 }
@@ -92,6 +104,9 @@ pub struct Summary {
     /// The MSM (surfaces only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub msm: Option<MsmSummary>,
+    /// Warnings (e.g. a quadrature rule with a large estimated error).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// Validates the scene, builds its models and describes them.
@@ -151,7 +166,12 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
             dofs: dof_map.n_total(),
             fixed_dofs: dof_map.n_total() - dof_map.n_free(),
             free_dofs: dof_map.n_free(),
+            reduced_dofs: model.n_free(),
             fixed_control_points: model.fixed_points().len(),
+            fixed_point_weights: (scene.dnurbs.weights_as_dofs && !scene.constraints.fixed_weights)
+                .then(|| scene.constraints.fixed_point_weights.name()),
+            scale_fixing_weight: scale_fixing_weight(&model),
+            quadrature: *model.quadrature(),
             stiffness_nonzeros: model.matrices().stiffness.nnz(),
         },
         simulation: SimulationSummary {
@@ -162,5 +182,20 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
             msm_integrator: time.msm_integrator,
         },
         msm,
+        warnings: model.quadrature().warning().into_iter().collect(),
     })
+}
+
+/// `weight of control point [i, j] (dof d) held at w = …` for the gauge weight, if any.
+pub fn scale_fixing_weight(model: &DnurbsModel) -> Option<String> {
+    let dof = model.gauge_weight()?;
+    let k = dof / 4;
+    let point = match model.geometry() {
+        Geometry::Surface(s) => format!("[{}, {}]", k / s.n_v(), k % s.n_v()),
+        Geometry::Curve(_) => format!("[{k}]"),
+    };
+    Some(format!(
+        "weight of control point {point} (dof {dof}) held at w = {}",
+        model.p0()[dof]
+    ))
 }

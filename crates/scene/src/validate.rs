@@ -624,6 +624,14 @@ fn check_constraints(
     info: Option<&GeomInfo>,
     p: &mut Problems,
 ) {
+    if c.fixed_point_weights == FixedPointWeights::Held && (!d.weights_as_dofs || c.fixed_weights) {
+        p.push(
+            "constraints.fixed_point_weights",
+            "\"held\"".to_string(),
+            "applies only to free weights: dnurbs.weights_as_dofs = true and \
+             constraints.fixed_weights = false",
+        );
+    }
     for (r, row) in c.linear.iter().enumerate() {
         let key = format!("constraints.linear[{r}]");
         p.finite(&format!("{key}.rhs"), row.rhs);

@@ -85,7 +85,7 @@ fn paper_scene_is_read_as_in_spec() {
         (2.7225, 0.8661, 0.005)
     );
     assert_eq!(scene.msm.fixed, MsmFixed::Auto);
-    assert_eq!(scene.dnurbs.quadrature_points, 4);
+    assert_eq!(scene.dnurbs.quadrature_points, Some(4));
     assert!(scene.path.ends_with("paper.toml"));
     let surface = scene.to_surface().unwrap();
     assert_eq!(surface.point(0.5, 0.5).unwrap()[2], 2.0);
@@ -128,7 +128,15 @@ fn defaults_apply_to_missing_sections() {
     assert_eq!(scene.material, Material::default());
     assert_eq!(scene.material.mu, 1.0);
     assert!(scene.constraints.fixed_weights);
-    assert_eq!(scene.dnurbs.quadrature_points, 4);
+    assert_eq!(
+        scene.constraints.fixed_point_weights,
+        FixedPointWeights::Free
+    );
+    // Omitted: chosen from the geometry (degree 1, equal weights: 2 points, exact).
+    assert_eq!(scene.dnurbs.quadrature_points, None);
+    let model = scene.build_dnurbs().unwrap();
+    assert_eq!(model.quadrature().points, 2);
+    assert_eq!(model.quadrature().estimated_error, 0.0);
     assert_eq!(scene.dnurbs.integration, Integration::Parameter);
     assert_eq!(scene.dnurbs.rest_shape, RestShape::Initial);
     assert_eq!(scene.simulation, SimulationSpec::default());
@@ -953,7 +961,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     ..ConstraintsSpec::default()
                 },
                 dnurbs: DnurbsOptions {
-                    quadrature_points: quadrature,
+                    quadrature_points: Some(quadrature),
                     integration: if nonneg {
                         Integration::Area
                     } else {

@@ -62,6 +62,9 @@ pub fn run(ctx: &Context, args: CheckArgs) -> CmdResult {
         return print_json(&value);
     }
     println!("{}: valid", args.scene.display());
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
     print_tree(&value, 1);
     Ok(())
 }

@@ -105,6 +105,9 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
         }
     };
     bar.finish();
+    for w in &simulated.warnings {
+        eprintln!("warning: {w}");
+    }
     // A failed run leaves the previous one in place (the staged folder is dropped).
     outcome?;
     write_run(staged.path(), &simulated, pvd)?;

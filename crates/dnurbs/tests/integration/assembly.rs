@@ -339,7 +339,7 @@ fn more_quadrature_points_change_nothing_for_b_splines() {
     let g = Geometry::Surface(support::wavy_patch());
     let s4 = assemble_scalar(&g, &all_terms(), &DnurbsOptions::default()).unwrap();
     let o6 = DnurbsOptions {
-        quadrature_points: 6,
+        quadrature_points: Some(6),
         ..DnurbsOptions::default()
     };
     let s6 = assemble_scalar(&g, &all_terms(), &o6).unwrap();
@@ -361,9 +361,11 @@ fn assembler_reuses_its_pattern_on_the_same_knots() {
         ..Loads::default()
     };
     for weights_as_dofs in [false, true] {
+        // A fixed rule: the automatic one depends on the geometry it is chosen for.
         let o = DnurbsOptions {
             weights_as_dofs,
             integration: Integration::Area,
+            quadrature_points: Some(5),
             ..DnurbsOptions::default()
         };
         let assembler =
@@ -381,5 +383,64 @@ fn assembler_reuses_its_pattern_on_the_same_knots() {
                 ..
             })
         ));
+    }
+}
+
+#[test]
+fn automatic_quadrature_is_exact_for_b_splines_and_converged_otherwise() {
+    use nurbspring_dnurbs::QUADRATURE_TOLERANCE;
+    let g = Geometry::Surface(support::wavy_patch());
+    let auto = DnurbsOptions::default().quadrature_for(&g).unwrap();
+    assert_eq!(
+        (auto.points, auto.polynomial, auto.estimated_error),
+        (4, true, 0.0)
+    );
+    let rational = Geometry::Surface(support::wavy_rational_patch());
+    for (integration, wad) in [
+        (Integration::Parameter, false),
+        (Integration::Area, false),
+        (Integration::Parameter, true),
+    ] {
+        let o = DnurbsOptions {
+            integration,
+            weights_as_dofs: wad,
+            ..DnurbsOptions::default()
+        };
+        let choice = o.quadrature_for(&rational).unwrap();
+        assert!(!choice.polynomial && choice.automatic);
+        assert!(choice.estimated_error <= QUADRATURE_TOLERANCE, "{choice:?}");
+        assert!(choice.warning().is_none());
+        // The estimate is honest: the chosen rule against a much finer one.
+        let at = |points| {
+            let o = DnurbsOptions {
+                quadrature_points: Some(points),
+                weights_as_dofs: false,
+                ..o.clone()
+            };
+            assemble_scalar(&rational, &all_terms(), &o).unwrap()
+        };
+        let (chosen, fine) = (at(choice.points), at(24));
+        let err = support::rel_diff(&chosen.mass, &fine.mass)
+            .max(support::rel_diff(&chosen.stiffness, &fine.stiffness));
+        assert!(
+            err <= 10.0 * QUADRATURE_TOLERANCE,
+            "{integration:?}: {err:e} at {choice:?}"
+        );
+        // A too small explicit rule is reported with its estimate and the key.
+        let coarse = DnurbsOptions {
+            quadrature_points: Some(2),
+            ..o.clone()
+        }
+        .quadrature_for(&rational)
+        .unwrap();
+        let warning = coarse.warning().unwrap();
+        assert!(
+            warning.contains("dnurbs.quadrature_points = 2"),
+            "{warning}"
+        );
+        eprintln!(
+            "{integration:?} wad {wad}: {choice:?}; 2 points: {:.1e}",
+            coarse.estimated_error
+        );
     }
 }

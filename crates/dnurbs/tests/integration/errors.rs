@@ -289,7 +289,7 @@ fn bad_constraints_are_rejected() {
 #[test]
 fn bad_options_and_lengths_are_rejected() {
     let o = DnurbsOptions {
-        quadrature_points: 0,
+        quadrature_points: Some(0),
         ..DnurbsOptions::default()
     };
     let e = assemble(

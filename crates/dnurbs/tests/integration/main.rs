@@ -5,6 +5,7 @@ mod support;
 mod assembly;
 mod constraints;
 mod convergence;
+mod current_state;
 mod errors;
 mod integrators;
 mod properties;

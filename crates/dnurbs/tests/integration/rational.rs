@@ -178,7 +178,7 @@ fn free_weights_converge_to_an_independent_rk4_reference() {
     let rule = surface_rule(
         surface.basis_u(),
         surface.basis_v(),
-        options.quadrature_points,
+        options.quadrature_points.unwrap(),
     )
     .unwrap();
     let acceleration = |p: &[f64], v: &[f64]| -> Vec<f64> {

@@ -5,7 +5,9 @@
 //! (`f_int(0) = −K q_rest`). Backward differences at `t + Δt`,
 //! `q̈ ≈ (q⁺ − 2q + q⁻)/Δt²`, `q̇ ≈ (q⁺ − q⁻)/(2Δt)`, K and f at `t + Δt`, give
 //! `(2M + ΔtD + 2Δt²K) q⁺ = 2Δt² f̃ + 4M q − (2M − ΔtD) q⁻`, `f̃ = f_ext(t + Δt) − f_int(0)`,
-//! started with `q⁻ = q⁰ − Δt v⁰`; the reported velocity is `(q⁺ − q⁻)/(2Δt)`. The matrix is
+//! started with `q⁻ = q⁰ − Δt v⁰`. The reported velocity is the one at the new time `t + Δt`,
+//! the second-order backward difference `(3q⁺ − 4q + q⁻)/(2Δt)` (the central difference
+//! `(q⁺ − q⁻)/(2Δt)` is the velocity at t, one step behind the state). The matrix is
 //! factored once. First order; unconditionally stable and dissipative: each undamped mode is
 //! multiplied by `(1 + ω²Δt²)^{-1/2}` per step (periods lengthen; energy is not conserved).
 
@@ -82,7 +84,7 @@ impl super::Stepper for TerzopoulosQin {
         self.solver.solve_in_place(&mut self.rhs);
         for i in 0..n {
             let q_new = self.rhs[i];
-            state.v[i] = (q_new - self.q_prev[i]) / (2.0 * dt);
+            state.v[i] = (3.0 * q_new - 4.0 * state.q[i] + self.q_prev[i]) / (2.0 * dt);
             self.q_prev[i] = state.q[i];
             state.q[i] = q_new;
         }
