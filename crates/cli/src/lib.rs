@@ -139,6 +139,23 @@ impl Context {
         run: Option<(&Path, Timing)>,
     ) -> Result<MsmSetup, Error> {
         if is_msm_file(path) {
+            // The model of an msm.json is built from the parsed file: its peak is proportional
+            // to the file's size (31 bytes a byte measured on a 10⁶-node chain; 40 allowed).
+            if let Ok(meta) = std::fs::metadata(path) {
+                let need = (64u64 << 20).saturating_add(meta.len().saturating_mul(40));
+                if need > self.limits.memory {
+                    return Err(Error::Resources {
+                        path: path.to_path_buf(),
+                        key: "(file size)".to_string(),
+                        message: format!(
+                            "a model of {} of msm.json needs an estimated {} of memory, above the limit of {} (raise it with --max-memory)",
+                            nurbspring_scene::resources::format_bytes(meta.len()),
+                            nurbspring_scene::resources::format_bytes(need),
+                            nurbspring_scene::resources::format_bytes(self.limits.memory)
+                        ),
+                    });
+                }
+            }
             return load_msm(path, overrides, flag);
         }
         overrides.validate(flag)?;

@@ -70,8 +70,8 @@ pub use model::{
     ANDERSON_DEPTH, DENSE_MODES_LIMIT, DnurbsModel, Modes, SteadySettings, SteadyState,
 };
 pub use options::{
-    DnurbsOptions, Integration, MAX_QUADRATURE_POINTS, QUADRATURE_TOLERANCE, QUADRATURE_WARNING,
-    QuadratureChoice, RestShape,
+    AUTO_SPAN, DnurbsOptions, Integration, MAX_QUADRATURE_POINTS, QUADRATURE_TOLERANCE,
+    QUADRATURE_WARNING, QuadratureChoice, RestShape,
 };
 pub use rational::{DEFAULT_MIN_WEIGHT_RATIO, RationalStepper};
 pub use run::{integrator_problem, names as integrator_names};

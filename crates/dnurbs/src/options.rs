@@ -1,6 +1,6 @@
 //! Numerical options of the D-NURBS discretization (docs/math.md §3).
 
-use crate::{DnurbsError, Geometry, Material};
+use crate::{DnurbsError, Geometry, Material, ScalarMatrices};
 
 /// The measure of the D-NURBS integrals (docs/math.md §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -107,13 +107,20 @@ impl DnurbsOptions {
             });
         }
         let start = (exact_points + usize::from(self.weights_as_dofs)).min(MAX_QUADRATURE_POINTS);
+        // Each candidate costs one assembly (the previous one is kept), and the search stops
+        // AUTO_SPAN rules above the start: a hostile geometry cannot make it assemble 2 × 30
+        // times at up to 32² points an element; what is left over is warned about.
+        let last_rule = (start + AUTO_SPAN).min(MAX_QUADRATURE_POINTS);
+        let mut previous = self.unit_matrices(geometry, start)?;
         let mut last = (start, f64::INFINITY);
-        for points in start..=MAX_QUADRATURE_POINTS {
-            let e = self.change(geometry, points)?;
+        for points in start..last_rule {
+            let next = self.unit_matrices(geometry, points + 1)?;
+            let e = relative_change(&previous, &next);
             last = (points, e);
             if e <= QUADRATURE_TOLERANCE {
                 break;
             }
+            previous = next;
         }
         Ok(QuadratureChoice {
             points: last.0,
@@ -131,43 +138,70 @@ impl DnurbsOptions {
         } else {
             (points - 1, points)
         };
-        let material = if geometry.is_curve() {
-            Material {
-                mu: 1.0,
-                alpha11: 1.0,
-                beta11: 1.0,
-                ..Material::default()
-            }
-        } else {
-            Material {
-                mu: 1.0,
-                alpha11: 1.0,
-                alpha22: 1.0,
-                beta11: 1.0,
-                beta12: 1.0,
-                beta22: 1.0,
-                ..Material::default()
-            }
+        let material = unit_material(geometry);
+        let (lo, hi) = (
+            self.unit_matrices_with(geometry, &material, a)?,
+            self.unit_matrices_with(geometry, &material, b)?,
+        );
+        Ok(relative_change(&lo, &hi))
+    }
+
+    /// The scalar M and K for unit coefficients at the rule `g`.
+    fn unit_matrices(&self, geometry: &Geometry, g: usize) -> Result<ScalarMatrices, DnurbsError> {
+        self.unit_matrices_with(geometry, &unit_material(geometry), g)
+    }
+
+    fn unit_matrices_with(
+        &self,
+        geometry: &Geometry,
+        material: &Material,
+        g: usize,
+    ) -> Result<ScalarMatrices, DnurbsError> {
+        let options = DnurbsOptions {
+            quadrature_points: Some(g),
+            weights_as_dofs: false,
+            ..self.clone()
         };
-        let at = |g: usize| {
-            let options = DnurbsOptions {
-                quadrature_points: Some(g),
-                weights_as_dofs: false,
-                ..self.clone()
-            };
-            crate::assemble_scalar(geometry, &material, &options)
-        };
-        let (lo, hi) = (at(a)?, at(b)?);
-        let rel = |x: &nurbspring_linalg::SparseMatrix, y: &nurbspring_linalg::SparseMatrix| {
-            let d = nurbspring_linalg::SparseMatrix::linear_combination(1.0, x, -1.0, y)
-                .map(|d| d.frobenius_norm())
-                .unwrap_or(f64::INFINITY);
-            let n = y.frobenius_norm();
-            if n > 0.0 { d / n } else { d }
-        };
-        Ok(rel(&lo.mass, &hi.mass).max(rel(&lo.stiffness, &hi.stiffness)))
+        crate::assemble_scalar(geometry, material, &options)
     }
 }
+
+/// Unit coefficients for every term the geometry has.
+fn unit_material(geometry: &Geometry) -> Material {
+    if geometry.is_curve() {
+        Material {
+            mu: 1.0,
+            alpha11: 1.0,
+            beta11: 1.0,
+            ..Material::default()
+        }
+    } else {
+        Material {
+            mu: 1.0,
+            alpha11: 1.0,
+            alpha22: 1.0,
+            beta11: 1.0,
+            beta12: 1.0,
+            beta22: 1.0,
+            ..Material::default()
+        }
+    }
+}
+
+/// `max(‖M_a − M_b‖/‖M_b‖, ‖K_a − K_b‖/‖K_b‖)` (Frobenius).
+fn relative_change(lo: &ScalarMatrices, hi: &ScalarMatrices) -> f64 {
+    let rel = |x: &nurbspring_linalg::SparseMatrix, y: &nurbspring_linalg::SparseMatrix| {
+        let d = nurbspring_linalg::SparseMatrix::linear_combination(1.0, x, -1.0, y)
+            .map(|d| d.frobenius_norm())
+            .unwrap_or(f64::INFINITY);
+        let n = y.frobenius_norm();
+        if n > 0.0 { d / n } else { d }
+    };
+    rel(&lo.mass, &hi.mass).max(rel(&lo.stiffness, &hi.stiffness))
+}
+
+/// How many rules above the first the automatic choice tries at most.
+pub const AUTO_SPAN: usize = 8;
 
 /// The automatic rule's target: estimated relative error of M and K.
 pub const QUADRATURE_TOLERANCE: f64 = 1e-10;

@@ -785,7 +785,7 @@ pub fn largest_generalized_eigenvalue(
     // unconverged top Ritz value is bounded below.
     const M_MAX: usize = 400;
     const LANCZOS_BYTES: usize = 64 << 20;
-    let m_max = (LANCZOS_BYTES / (8 * n)).clamp(40, M_MAX);
+    let m_max = (LANCZOS_BYTES / (8 * n)).clamp(20, M_MAX);
     let res = lanczos_largest(n, &mut op, &b, &[], 1, 0, tol, m_max, 0xB16_B00B5, None)?;
     // No Ritz value at all: the Krylov space collapsed at its first vector, which a non-zero K
     // only allows when M⁻¹K underflows (masses near the top of the f64 range).

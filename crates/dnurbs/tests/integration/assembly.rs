@@ -444,3 +444,27 @@ fn automatic_quadrature_is_exact_for_b_splines_and_converged_otherwise() {
         );
     }
 }
+
+#[test]
+fn automatic_quadrature_search_is_bounded_on_extreme_weights() {
+    use nurbspring_dnurbs::{AUTO_SPAN, QUADRATURE_TOLERANCE};
+    // Weights spanning six orders of magnitude: the integrands are far from polynomials, so no
+    // rule near the start reaches the tolerance. The search stops AUTO_SPAN rules above the
+    // start (one assembly each) and reports what it reached, with a warning naming the key.
+    let s = support::wavy_patch();
+    let w: Vec<f64> = (0..s.n_control_points())
+        .map(|k| 10f64.powi(((k * 5) % 7) as i32 - 3))
+        .collect();
+    let extreme = Geometry::Surface(
+        s.with_control_points_and_weights(s.control_points().to_vec(), w)
+            .unwrap(),
+    );
+    let choice = DnurbsOptions::default().quadrature_for(&extreme).unwrap();
+    let start = 4;
+    assert!(choice.automatic && !choice.polynomial);
+    assert!(choice.points <= start + AUTO_SPAN, "{choice:?}");
+    if choice.estimated_error > QUADRATURE_TOLERANCE {
+        assert_eq!(choice.points, start + AUTO_SPAN - 1, "{choice:?}");
+    }
+    assert!(choice.estimated_error.is_finite());
+}
