@@ -191,15 +191,24 @@ pub fn main_with_args() -> ExitCode {
     let cancel = Arc::new(AtomicBool::new(false));
     {
         let cancel = cancel.clone();
-        // SIGINT, SIGTERM and SIGHUP ask the run to stop at its next step; a second signal ends
-        // the process at once, except while an output folder is being swapped in (microseconds):
-        // a staged run is then either complete in place or left aside for the next run to remove.
+        // SIGINT, SIGTERM and SIGHUP ask a cancellable command (derive, paper, simulate) to
+        // stop at its next step, and end it after CANCEL_GRACE if it has not (a long
+        // factorization does not look at the flag); any other command, and a second signal,
+        // end the process at once. Never during an output folder's swap (microseconds): a
+        // staged run is then complete in place, or left aside for the next run to remove.
+        let cancellable = matches!(
+            cli.command,
+            Command::Derive(_) | Command::Paper(_) | Command::Simulate(_)
+        );
         let _ = ctrlc::set_handler(move || {
-            if cancel.swap(true, std::sync::atomic::Ordering::SeqCst)
-                && !nurbspring_io::folder::committing()
-            {
-                std::process::exit(i32::from(exit::CANCELLED));
+            let first = !cancel.swap(true, std::sync::atomic::Ordering::SeqCst);
+            if !first || !cancellable {
+                exit_cancelled();
             }
+            std::thread::spawn(|| {
+                std::thread::sleep(CANCEL_GRACE);
+                exit_cancelled();
+            });
         });
     }
     let mut limits = Limits::from_system();
@@ -235,6 +244,19 @@ pub fn main_with_args() -> ExitCode {
             ExitCode::from(exit::code(&e))
         }
     }
+}
+
+/// How long a cancellable command may take to stop after a signal before it is ended.
+const CANCEL_GRACE: std::time::Duration = std::time::Duration::from_secs(5);
+
+/// Ends the process with the cancellation exit code, once no output folder is being swapped.
+fn exit_cancelled() -> ! {
+    while nurbspring_io::folder::committing() {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    nurbspring_io::atomic::remove_pending();
+    nurbspring_io::folder::remove_pending();
+    std::process::exit(i32::from(exit::CANCELLED))
 }
 
 fn init_logging(global: &GlobalArgs) {

@@ -275,3 +275,42 @@ fn a_huge_lattice_mass_is_refused_not_a_panic() {
         assert!(stderr.contains("mass"), "{cmd}: {stderr}");
     }
 }
+
+/// A command that never looks at the cancel flag (here `check`, building and bounding a large
+/// lattice) ends at once on SIGTERM, with the cancellation code.
+#[cfg(unix)]
+#[test]
+fn sigterm_ends_a_non_cancellable_command_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = paper_with(
+        dir.path(),
+        "structural = true",
+        "grid = \"uniform\"\nnodes_u = 300\nnodes_v = 300\nstructural = true",
+    );
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("nurbspring"))
+        .arg("--quiet")
+        .arg("check")
+        .arg(&scene)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(child.try_wait().unwrap().is_none(), "check ended too soon");
+    let sent = Instant::now();
+    let ok = std::process::Command::new("kill")
+        .arg("-TERM")
+        .arg(child.id().to_string())
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let code = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s.code();
+        }
+        assert!(sent.elapsed() < Duration::from_secs(3), "still running");
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    assert_eq!(code, Some(130));
+    assert_eq!(names(dir.path()), ["scene.toml"]);
+}

@@ -16,16 +16,45 @@ use crate::OutputError;
 /// Distinguishes temporary files of concurrent writes within one process.
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
+/// Temporary files being written now, so that a process ended by a signal can remove them
+/// ([`remove_pending`]).
+static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Removes the temporary files of writes in progress: for a process about to exit on a signal,
+/// so that no `.NAME.tmp-*` file outlives it (a staged output folder is removed as a whole
+/// anyway; this matters for single files written in place).
+pub fn remove_pending() {
+    if let Ok(list) = PENDING.lock() {
+        for p in list.iter() {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
 /// Removes the temporary file when dropped, unless disarmed after a successful rename.
 struct TempGuard {
     path: PathBuf,
     armed: bool,
 }
 
+impl TempGuard {
+    fn new(path: PathBuf) -> Self {
+        if let Ok(mut list) = PENDING.lock() {
+            list.push(path.clone());
+        }
+        Self { path, armed: true }
+    }
+}
+
 impl Drop for TempGuard {
     fn drop(&mut self) {
         if self.armed {
             let _ = std::fs::remove_file(&self.path);
+        }
+        if let Ok(mut list) = PENDING.lock()
+            && let Some(i) = list.iter().position(|p| *p == self.path)
+        {
+            list.swap_remove(i);
         }
     }
 }
@@ -76,10 +105,7 @@ where
 {
     let path = path.as_ref();
     let (file, tmp) = create_temp(path)?;
-    let mut guard = TempGuard {
-        path: tmp,
-        armed: true,
-    };
+    let mut guard = TempGuard::new(tmp);
     let mut writer = BufWriter::new(file);
     write(&mut writer).map_err(|e| OutputError::io(path, e))?;
     writer.flush().map_err(|e| OutputError::io(path, e))?;

@@ -44,6 +44,26 @@ pub const MARKER: &str = ".nurbspring-run";
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 static COMMITTING: AtomicBool = AtomicBool::new(false);
+/// Staging folders of this process not yet committed or dropped ([`remove_pending`]).
+static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Removes the staging folders of runs in progress: for a process about to exit on a signal
+/// (the target folders keep their previous runs).
+pub fn remove_pending() {
+    if let Ok(list) = PENDING.lock() {
+        for p in list.iter() {
+            let _ = std::fs::remove_dir_all(p);
+        }
+    }
+}
+
+fn forget(path: &Path) {
+    if let Ok(mut list) = PENDING.lock()
+        && let Some(i) = list.iter().position(|p| p == path)
+    {
+        list.swap_remove(i);
+    }
+}
 
 /// True while a [`StagedDir::commit`] is swapping folders: a signal handler that would end the
 /// process at once should wait for it (the swap takes microseconds).
@@ -91,6 +111,9 @@ impl StagedDir {
             let staging = parent.join(format!(".{name}.staging-{pid}-{n}"));
             match std::fs::create_dir(&staging) {
                 Ok(()) => {
+                    if let Ok(mut list) = PENDING.lock() {
+                        list.push(staging.clone());
+                    }
                     let dir = StagedDir {
                         target,
                         staging,
@@ -173,6 +196,7 @@ impl Drop for StagedDir {
         if !self.done {
             let _ = std::fs::remove_dir_all(&self.staging);
         }
+        forget(&self.staging);
     }
 }
 
