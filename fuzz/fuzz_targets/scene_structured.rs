@@ -127,5 +127,11 @@ fn scene(i: &Input) -> String {
 }
 
 fuzz_target!(|input: Input| {
-    common::run_scene_text(&scene(&input));
+    let text = scene(&input);
+    // `NURBSPRING_FUZZ_PRINT=1 …/scene_structured ARTIFACT` prints the scene of a finding, to
+    // turn it into a test of the main suite.
+    if std::env::var_os("NURBSPRING_FUZZ_PRINT").is_some() {
+        eprintln!("{text}");
+    }
+    common::run_scene_text(&text);
 });
