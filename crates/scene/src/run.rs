@@ -11,10 +11,13 @@ use nurbspring_dnurbs::DnurbsModel;
 use nurbspring_io::output::write_csv;
 use nurbspring_io::vtk::PvdSeries;
 use nurbspring_msm::MsmModel;
-use nurbspring_sim::{IntegratorKind, RunOptions, RunSummary, SimError, check_time, step_count};
+use nurbspring_sim::{
+    IntegratorKind, RunOptions, RunSummary, SimError, StabilityLimit, check_time, step_count,
+};
 
 use crate::export::{write_geometry_frame, write_lattice_frame};
 use crate::msm_file::MsmSetup;
+use crate::spec::default_frame_every;
 use crate::{Error, Scene};
 
 /// What to change of the scene's (or file's) run settings.
@@ -45,10 +48,18 @@ pub struct Simulated {
     pub trajectory: Trajectory,
     /// The ParaView frames written, `(t, file name)`.
     pub frames: Vec<(f64, String)>,
+    /// A frame was written every `vtk_every` samples.
+    pub vtk_every: usize,
+    /// True when `vtk_every > 1` was chosen by default (no `output.vtk_every`) to keep the
+    /// frame count at most [`crate::spec::DEFAULT_MAX_FRAMES`].
+    pub frames_capped: bool,
     /// The run's summary (steps taken, cancellation).
     pub summary: Option<RunSummary>,
-    /// Warnings about the model (e.g. the quadrature's estimated error).
+    /// Warnings about the model (e.g. the quadrature's estimated error) or the run (an explicit
+    /// integrator replaced by an implicit one, [`explicit_fallback`]).
     pub warnings: Vec<String>,
+    /// An MSM's explicit stability limit at its initial state.
+    pub stability: Option<StabilityLimit>,
 }
 
 /// Where a value of a run came from: a key of the scene or file, or an option.
@@ -109,11 +120,18 @@ fn integrator_error(
     }
 }
 
+/// Samples a run of `steps` steps records, keeping every `save_every`-th (and step 0).
+fn samples(steps: usize, save_every: usize) -> usize {
+    steps / save_every.max(1) + 1
+}
+
 /// Sample and frame bookkeeping shared by both models.
 struct Frames<'a> {
     out: Option<&'a Path>,
     stem: &'static str,
     every: usize,
+    /// `every` was chosen to write at most [`crate::spec::DEFAULT_MAX_FRAMES`] frames.
+    capped: bool,
     samples: usize,
     written: Vec<(f64, String)>,
     error: Option<Error>,
@@ -181,10 +199,12 @@ pub fn simulate_dnurbs(
     let mut opts = RunOptions::new(dt, t_end, integrator);
     opts.cancel = request.cancel.clone();
     let steps = step_count(0.0, t_end, dt);
+    let save_every = scene.simulation.save_every.max(1);
     let mut frames = Frames {
         out,
         stem: "surface",
-        every: scene.output.vtk_every.max(1),
+        every: scene.output.frame_every(samples(steps, save_every)),
+        capped: scene.output.vtk_every.is_none(),
         samples: 0,
         written: Vec::new(),
         error: None,
@@ -197,9 +217,7 @@ pub fn simulate_dnurbs(
         },
         initial,
         &opts,
-        Recording {
-            every: scene.simulation.save_every.max(1),
-        },
+        Recording { every: save_every },
         &mut |s, p| {
             progress(s.step, steps);
             frames.sample(s.t, |path| {
@@ -229,7 +247,16 @@ pub fn simulate_msm(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Simulated, Result<RunSummary, Error>), Error> {
     let (dt, t_end) = resolve_time(&setup.path, setup.run.dt, setup.run.t_end, request)?;
-    let integrator = request.integrator.unwrap_or(setup.run.integrator);
+    let mut integrator = request.integrator.unwrap_or(setup.run.integrator);
+    let stability = setup
+        .model
+        .stability()
+        .map_err(|e| Error::model(&setup.path, None, e))?;
+    let mut warnings = Vec::new();
+    if let Some(w) = explicit_fallback(integrator, dt, stability.dt_critical, request) {
+        warnings.push(w);
+        integrator = IMPLICIT_FALLBACK;
+    }
     if let Some(reason) = MsmModel::integrator_problem(integrator) {
         return Err(integrator_error(
             &setup.path,
@@ -246,7 +273,10 @@ pub fn simulate_msm(
     let mut frames = Frames {
         out,
         stem: "lattice",
-        every: setup.vtk_every,
+        every: setup
+            .vtk_every
+            .unwrap_or_else(|| default_frame_every(samples(steps, setup.save_every))),
+        capped: setup.vtk_every.is_none(),
         samples: 0,
         written: Vec::new(),
         error: None,
@@ -272,7 +302,7 @@ pub fn simulate_msm(
     } else {
         "simulation.dt"
     };
-    finish(
+    let (mut simulated, outcome) = finish(
         setup.path.clone(),
         key,
         integrator,
@@ -281,7 +311,39 @@ pub fn simulate_msm(
         trajectory,
         frames,
         result,
-    )
+    )?;
+    simulated.stability = Some(stability);
+    simulated.warnings = warnings;
+    Ok((simulated, outcome))
+}
+
+/// The implicit integrator an MSM run falls back to when the file's explicit one is above its
+/// stability limit: Newmark's average acceleration, unconditionally stable and without
+/// numerical damping.
+pub const IMPLICIT_FALLBACK: IntegratorKind = IntegratorKind::Newmark;
+
+/// The warning of a run whose default (not requested) explicit integrator is unstable at `dt`
+/// (`dt ≥ dt_critical`, the rule of [`nurbspring_sim::simulate`]): the run then uses
+/// [`IMPLICIT_FALLBACK`]. `None` when the integrator was asked for with `--integrator`, when
+/// `--force-unstable` was given, for implicit integrators, and below the limit.
+pub fn explicit_fallback(
+    integrator: IntegratorKind,
+    dt: f64,
+    dt_critical: f64,
+    request: &RunRequest,
+) -> Option<String> {
+    if request.integrator.is_some()
+        || request.force_unstable
+        || !integrator.is_explicit()
+        || dt < dt_critical
+    {
+        return None;
+    }
+    Some(format!(
+        "{integrator} is unstable at dt = {dt} s (dt_critical = {dt_critical:.4e} s); running \
+         {IMPLICIT_FALLBACK} instead (--integrator {integrator} --force-unstable runs it anyway, \
+         --integrator chooses another)"
+    ))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -306,12 +368,20 @@ fn finish(
             t_end,
             summary: outcome.as_ref().ok().cloned(),
             trajectory,
+            vtk_every: frames.every,
+            frames_capped: frames.capped && frames.every > 1,
             frames: frames.written,
             warnings: Vec::new(),
+            stability: None,
         },
         outcome,
     ))
 }
+
+/// The columns of `energy.csv`: time, kinetic energy, elastic energy (the springs' or the
+/// surface's, without the load), the load's potential (`external`, zero at the initial state of
+/// an MSM) and their sum.
+pub const ENERGY_COLUMNS: [&str; 5] = ["t", "kinetic", "elastic", "external", "total"];
 
 /// Writes `trajectory.csv`, `energy.csv` and the `.pvd` series (`pvd` is its file name).
 pub fn write_run(out: &Path, run: &Simulated, pvd: &str) -> Result<(), Error> {
@@ -333,11 +403,12 @@ pub fn write_run(out: &Path, run: &Simulated, pvd: &str) -> Result<(), Error> {
     write_csv(out.join("trajectory.csv"), &header, rows)?;
     write_csv(
         out.join("energy.csv"),
-        &["t", "kinetic", "elastic", "total"],
+        &ENERGY_COLUMNS,
         traj.t
             .iter()
             .zip(&traj.energy)
-            .map(|(t, e)| vec![*t, e[0], e[1], e[0] + e[1]]),
+            // `+ 0.0` writes an unloaded model's `−0` load potential as 0.
+            .map(|(t, e)| vec![*t, e[0], e[1], e[2] + 0.0, e[0] + e[1] + e[2]]),
     )?;
     let mut series = PvdSeries::default();
     for (t, f) in &run.frames {
