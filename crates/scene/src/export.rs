@@ -300,19 +300,40 @@ pub struct DofsFile<'a> {
     pub matrices_cover: &'static str,
 }
 
+/// What [`write_matrices`] wrote.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct MatricesWritten {
+    /// Rows (= columns) of M, D and K: every dof.
+    pub dofs: usize,
+    /// Free dofs.
+    pub free_dofs: usize,
+    /// Entries stored in each file (`symmetric`: the non-zeros with row ≥ column).
+    pub stored_entries: std::collections::BTreeMap<&'static str, usize>,
+    /// The files.
+    pub files: Vec<&'static str>,
+}
+
+/// The entries a `symmetric` Matrix Market file of `a` stores.
+fn lower_nonzeros(a: &nurbspring_sim::SparseMatrix) -> usize {
+    a.triplets().filter(|&(i, j, v)| i >= j && v != 0.0).count()
+}
+
 /// `M.mtx`, `D.mtx`, `K.mtx`, `f.mtx` and `dofs.json` of a D-NURBS model.
 pub fn write_matrices(
     out: &Path,
     model: &nurbspring_dnurbs::DnurbsModel,
     scene_label: &str,
-) -> Result<(), Error> {
-    use nurbspring_io::output::{write_json, write_matrix_market, write_matrix_market_vector};
+) -> Result<MatricesWritten, Error> {
+    use nurbspring_io::output::{
+        write_json, write_matrix_market_symmetric, write_matrix_market_vector,
+    };
     let m = model.matrices();
     let ordering = dof_ordering(m.dofs_per_point);
     let comment = format!("nurbspring D-NURBS matrix of {scene_label}; dof ordering: {ordering}");
-    write_matrix_market(out.join("M.mtx"), &m.mass, &comment)?;
-    write_matrix_market(out.join("D.mtx"), &m.damping, &comment)?;
-    write_matrix_market(out.join("K.mtx"), &m.stiffness, &comment)?;
+    // M, D and K are symmetric: the lower triangle's non-zeros only.
+    write_matrix_market_symmetric(out.join("M.mtx"), &m.mass, &comment)?;
+    write_matrix_market_symmetric(out.join("D.mtx"), &m.damping, &comment)?;
+    write_matrix_market_symmetric(out.join("K.mtx"), &m.stiffness, &comment)?;
     write_matrix_market_vector(out.join("f.mtx"), &m.force, &comment)?;
     let dof_map = model.dof_map();
     write_json(
@@ -329,7 +350,19 @@ pub fn write_matrices(
             matrices_cover: "all dofs, before constraints are applied",
         },
     )?;
-    Ok(())
+    Ok(MatricesWritten {
+        dofs: dof_map.n_total(),
+        free_dofs: dof_map.n_free(),
+        stored_entries: [
+            ("M", lower_nonzeros(&m.mass)),
+            ("D", lower_nonzeros(&m.damping)),
+            ("K", lower_nonzeros(&m.stiffness)),
+            ("f", m.force.len()),
+        ]
+        .into_iter()
+        .collect(),
+        files: vec!["M.mtx", "D.mtx", "K.mtx", "f.mtx", "dofs.json"],
+    })
 }
 
 /// `steady.vts` (the deformed surface) and `steady.csv` (its control points) of a steady
