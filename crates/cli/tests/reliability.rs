@@ -175,6 +175,7 @@ fn sigterm_and_sighup_stop_cleanly_and_keep_the_previous_run() {
                 "--model", "dnurbs", "--dt", "0.0001", "--t-end", "1000", "--out",
             ])
             .arg(&out)
+            .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
@@ -197,6 +198,27 @@ fn sigterm_and_sighup_stop_cleanly_and_keep_the_previous_run() {
             std::thread::sleep(Duration::from_millis(20));
         };
         assert_eq!(code, Some(130), "SIG{signal}");
+        // One line on stderr, saying where the samples are; nothing "written" on stdout.
+        let (mut stdout, mut stderr) = (String::new(), String::new());
+        use std::io::Read;
+        child
+            .stdout
+            .take()
+            .unwrap()
+            .read_to_string(&mut stdout)
+            .unwrap();
+        child
+            .stderr
+            .take()
+            .unwrap()
+            .read_to_string(&mut stderr)
+            .unwrap();
+        assert!(stdout.is_empty(), "SIG{signal}: {stdout}");
+        assert_eq!(stderr.lines().count(), 1, "SIG{signal}: {stderr}");
+        assert!(
+            stderr.starts_with("error: interrupted: ") && stderr.contains("run.interrupted"),
+            "SIG{signal}: {stderr}"
+        );
         assert_eq!(
             std::fs::read(out.join("trajectory.csv")).unwrap(),
             before,

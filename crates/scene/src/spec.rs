@@ -508,7 +508,8 @@ impl OutputSpec {
     /// A ParaView frame every n of a run's `samples` recorded samples: `vtk_every` when set,
     /// otherwise the smallest n that writes at most [`DEFAULT_MAX_FRAMES`] frames.
     pub fn frame_every(&self, samples: usize) -> usize {
-        self.vtk_every.unwrap_or_else(|| default_frame_every(samples))
+        self.vtk_every
+            .unwrap_or_else(|| default_frame_every(samples))
     }
 }
 

@@ -194,11 +194,7 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
 
 /// What `check` warns about a valid scene: a material without stiffness, a body free to move
 /// rigidly, and a time step above the explicit limit of the scene's MSM integrator.
-pub fn scene_warnings(
-    scene: &Scene,
-    model: &DnurbsModel,
-    msm: Option<&MsmSummary>,
-) -> Vec<String> {
+pub fn scene_warnings(scene: &Scene, model: &DnurbsModel, msm: Option<&MsmSummary>) -> Vec<String> {
     let mut warnings = Vec::new();
     let m = &scene.material;
     let names: &[(&str, f64)] = match model.geometry() {

@@ -101,10 +101,7 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
     if let (Some(s), true) = (simulated.stability, ctx.verbose()) {
         eprintln!(
             "stability: omega_max = {:.6e} rad/s, dt_critical = {:.6e} s (dt = {}, {})",
-            s.omega_max,
-            s.dt_critical,
-            simulated.dt,
-            simulated.integrator
+            s.omega_max, s.dt_critical, simulated.dt, simulated.integrator
         );
     }
     // A failed run leaves the previous one in place (the staged folder is dropped).
@@ -118,6 +115,13 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
         });
     }
     let out = commit_out_dir(staged)?;
+    if ctx.verbose() && simulated.frames_capped {
+        eprintln!(
+            "note: a ParaView frame every {} samples (at most {DEFAULT_MAX_FRAMES} by default); \
+             set output.vtk_every = 1 in the scene for every sample",
+            simulated.vtk_every
+        );
+    }
     if args.json {
         return print_json(&run_summary(what, &simulated, &summary, &out));
     }
@@ -130,13 +134,6 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
         simulated.frames.len(),
         out.display()
     );
-    if ctx.verbose() && simulated.frames_capped {
-        eprintln!(
-            "note: a ParaView frame every {} samples (at most {DEFAULT_MAX_FRAMES} by default); \
-             set output.vtk_every = 1 in the scene for every sample",
-            simulated.vtk_every
-        );
-    }
     Ok(())
 }
 
