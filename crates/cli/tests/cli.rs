@@ -656,6 +656,34 @@ fn matrices_and_derive_print_json() {
             .unwrap();
     assert_eq!(v, file);
     assert!(v["derived"]["k_edge"].as_f64().unwrap() > 0.0);
+    // The figures: the mass scan's x unit and selected mass, the scene MSM's k_bend, the
+    // energy legend.
+    let svg = |name: &str| std::fs::read_to_string(dir.path().join("d").join(name)).unwrap();
+    let scan = svg("mass_scan.svg");
+    let selected = v["mass"]["selected"].as_f64().unwrap();
+    assert!(
+        scan.contains("node mass m [kg] (an eigenvalue of M)"),
+        "{scan}"
+    );
+    assert!(
+        scan.contains(&format!("selected m = {selected:.6}")),
+        "{scan}"
+    );
+    let central = svg("central_node.svg");
+    assert!(
+        central.contains("scene&apos;s MSM k_edge=2.7225, k_diag=0.8661, k_bend=0, m=0.005"),
+        "{central}"
+    );
+    let energy = svg("energy.svg");
+    // (The D-NURBS reference of the paper scene is its exact modal solution, which records
+    // no energies: only the MSM's curves are drawn.)
+    for needle in [
+        "derived MSM total (kinetic + elastic + load)",
+        "derived MSM kinetic",
+        "energy / largest kinetic + elastic energy of the model",
+    ] {
+        assert!(energy.contains(needle), "{needle}");
+    }
 }
 
 /// `derive` writes every file; msm.json is loadable by `simulate --model msm`.

@@ -453,3 +453,39 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both curves of a model are divided by its largest kinetic + elastic energy; the total
+    /// includes the load potential.
+    #[test]
+    fn energy_series_are_relative_to_the_model_scale() {
+        let traj = Trajectory {
+            t: vec![0.0, 1.0, 2.0],
+            probes: vec![],
+            energy: vec![[4.0, 0.0, 0.0], [1.0, 2.0, -1.0], [0.0, 5.0, -2.0]],
+            stopped: None,
+        };
+        let s = energy_series("MSM", &traj);
+        assert_eq!(s[0].name, "MSM total (kinetic + elastic + load)");
+        assert_eq!(s[0].points, vec![(0.0, 0.8), (1.0, 0.4), (2.0, 0.6)]);
+        assert_eq!(s[1].name, "MSM kinetic");
+        assert_eq!(s[1].points, vec![(0.0, 0.8), (1.0, 0.2), (2.0, 0.0)]);
+        // A model at rest throughout is not scaled.
+        let rest = Trajectory {
+            energy: vec![[0.0, 0.0, 0.0]; 3],
+            ..traj
+        };
+        assert_eq!(energy_series("x", &rest)[0].points[2], (2.0, 0.0));
+    }
+
+    #[test]
+    fn selected_point_is_the_nearest_candidate() {
+        let scan = [(0.001, 3.0), (0.005, 1.0), (0.02, 2.0)];
+        assert_eq!(selected_point(&scan, 0.0049), Some((0.005, 1.0)));
+        assert_eq!(selected_point(&scan, f64::NAN), None);
+        assert_eq!(selected_point(&[], 1.0), None);
+    }
+}
