@@ -228,6 +228,32 @@ fn simulate_dnurbs_writes_trajectory_energy_and_series() {
     assert!(dir.path().join("energy.csv").exists());
     let pvd = std::fs::read_to_string(dir.path().join("surface.pvd")).unwrap();
     assert!(pvd.contains("surface_000000.vts"));
+    // Frames carry displacement and velocity; a control-net series runs alongside.
+    let frame = std::fs::read_to_string(dir.path().join("surface_000003.vts")).unwrap();
+    assert!(frame.contains("Name=\"displacement\"") && frame.contains("Name=\"velocity\""));
+    let net = std::fs::read_to_string(dir.path().join("control_net.pvd")).unwrap();
+    assert_eq!(net.matches("<DataSet").count(), 11);
+    assert!(net.contains("file=\"control_net_000010.vtu\""));
+    let frame = std::fs::read_to_string(dir.path().join("control_net_000010.vtu")).unwrap();
+    for name in ["displacement", "velocity", "weight"] {
+        assert!(frame.contains(&format!("Name=\"{name}\"")), "{name}");
+    }
+    assert!(frame.contains("NumberOfPoints=\"35\"") && frame.contains("NumberOfCells=\"58\""));
+    // A curve's frames are polylines in .vtu files of a curve.pvd series.
+    let dir = tempfile::tempdir().unwrap();
+    let out = bin()
+        .arg("simulate")
+        .arg(examples().join("string.toml"))
+        .args(["--model", "dnurbs", "--t-end", "0.05", "--json", "--out"])
+        .arg(dir.path())
+        .assert()
+        .success();
+    assert_eq!(json_of(&out.get_output().stdout)["pvd"], "curve.pvd");
+    let pvd = std::fs::read_to_string(dir.path().join("curve.pvd")).unwrap();
+    assert!(pvd.contains("file=\"curve_000005.vtu\""), "{pvd}");
+    let frame = std::fs::read_to_string(dir.path().join("curve_000005.vtu")).unwrap();
+    assert!(frame.contains("<UnstructuredGrid>") && frame.contains("Name=\"velocity\""));
+    assert!(dir.path().join("control_net_000005.vtu").exists());
 }
 
 #[test]

@@ -36,11 +36,13 @@ fn names(dir: &Path) -> Vec<String> {
     v
 }
 
-/// Frame files in a folder, and the frames its `.pvd` lists.
+/// Frame files of the series `pvd` in a folder (`surface.pvd`: `surface_*.vts`), and the frames
+/// the `.pvd` lists.
 fn frames(dir: &Path, pvd: &str) -> (usize, usize) {
+    let stem = format!("{}_", pvd.trim_end_matches(".pvd"));
     let on_disk = names(dir)
         .iter()
-        .filter(|n| n.ends_with(".vts") || n.ends_with(".vtu"))
+        .filter(|n| n.starts_with(&stem) && (n.ends_with(".vts") || n.ends_with(".vtu")))
         .count();
     let listed = std::fs::read_to_string(dir.join(pvd))
         .unwrap()
@@ -69,6 +71,7 @@ fn a_shorter_rerun_leaves_no_stale_frames() {
     assert_eq!((disk, listed), (51, 51));
     simulate(&paper(), &out, "0.2").success();
     assert_eq!(frames(&out, "surface.pvd"), (21, 21));
+    assert_eq!(frames(&out, "control_net.pvd"), (21, 21));
     // Nothing beside the folder: no staging or parked folders left.
     assert_eq!(names(dir.path()), ["run"]);
 }

@@ -15,7 +15,7 @@ use nurbspring_sim::{
     IntegratorKind, RunOptions, RunSummary, SimError, StabilityLimit, check_time, step_count,
 };
 
-use crate::export::{write_geometry_frame, write_lattice_frame};
+use crate::export::{control_net_grid, write_geometry_frame_with, write_lattice_frame};
 use crate::msm_file::MsmSetup;
 use crate::spec::default_frame_every;
 use crate::{Error, Scene};
@@ -46,8 +46,12 @@ pub struct Simulated {
     pub t_end: f64,
     /// Probe positions and energies of every recorded sample.
     pub trajectory: Trajectory,
+    /// The ParaView series: `surface.pvd`, `curve.pvd` or `lattice.pvd`.
+    pub pvd: String,
     /// The ParaView frames written, `(t, file name)`.
     pub frames: Vec<(f64, String)>,
+    /// The D-NURBS control-net frames (`control_net.pvd`), one per frame.
+    pub control_net_frames: Vec<(f64, String)>,
     /// A frame was written every `vtk_every` samples.
     pub vtk_every: usize,
     /// True when `vtk_every > 1` was chosen by default (no `output.vtk_every`) to keep the
@@ -128,7 +132,11 @@ fn samples(steps: usize, save_every: usize) -> usize {
 /// Sample and frame bookkeeping shared by both models.
 struct Frames<'a> {
     out: Option<&'a Path>,
+    /// `surface` (`.vts`), `curve` or `lattice` (`.vtu`).
     stem: &'static str,
+    /// Also a `control_net_NNNNNN.vtu` frame per frame (D-NURBS).
+    control_net: bool,
+    control_net_written: Vec<(f64, String)>,
     every: usize,
     /// `every` was chosen to write at most [`crate::spec::DEFAULT_MAX_FRAMES`] frames.
     capped: bool,
@@ -138,8 +146,9 @@ struct Frames<'a> {
 }
 
 impl Frames<'_> {
-    /// Called once per recorded sample; writes a frame every `every` samples.
-    fn sample(&mut self, t: f64, write: impl FnOnce(&Path) -> Result<(), Error>) {
+    /// Called once per recorded sample; writes a frame every `every` samples:
+    /// `write(frame path, control-net frame path)` (the second is used with `control_net`).
+    fn sample(&mut self, t: f64, write: impl FnOnce(&Path, &Path) -> Result<(), Error>) {
         let index = self.samples;
         self.samples += 1;
         let Some(out) = self.out else { return };
@@ -148,8 +157,14 @@ impl Frames<'_> {
         }
         let ext = if self.stem == "surface" { "vts" } else { "vtu" };
         let name = format!("{}_{:06}.{ext}", self.stem, self.written.len());
-        match write(&out.join(&name)) {
-            Ok(()) => self.written.push((t, name)),
+        let net = format!("control_net_{:06}.vtu", self.written.len());
+        match write(&out.join(&name), &out.join(&net)) {
+            Ok(()) => {
+                self.written.push((t, name));
+                if self.control_net {
+                    self.control_net_written.push((t, net));
+                }
+            }
             Err(e) => self.error = Some(e),
         }
     }
@@ -200,9 +215,12 @@ pub fn simulate_dnurbs(
     opts.cancel = request.cancel.clone();
     let steps = step_count(0.0, t_end, dt);
     let save_every = scene.simulation.save_every.max(1);
+    let curve = matches!(model.geometry(), nurbspring_dnurbs::Geometry::Curve(_));
     let mut frames = Frames {
         out,
-        stem: "surface",
+        stem: if curve { "curve" } else { "surface" },
+        control_net: true,
+        control_net_written: Vec::new(),
         every: scene.output.frame_every(samples(steps, save_every)),
         capped: scene.output.vtk_every.is_none(),
         samples: 0,
@@ -220,8 +238,10 @@ pub fn simulate_dnurbs(
         Recording { every: save_every },
         &mut |s, p| {
             progress(s.step, steps);
-            frames.sample(s.t, |path| {
-                write_geometry_frame(path, model.geometry(), p, dpp)
+            frames.sample(s.t, |path, net| {
+                let v = model.full_velocity(s.v);
+                write_geometry_frame_with(path, model.geometry(), p, Some(&v), dpp)?;
+                Ok(control_net_grid(model.geometry(), p, &v, model.p0(), dpp).write(net)?)
             });
         },
     );
@@ -273,6 +293,8 @@ pub fn simulate_msm(
     let mut frames = Frames {
         out,
         stem: "lattice",
+        control_net: false,
+        control_net_written: Vec::new(),
         every: setup
             .vtk_every
             .unwrap_or_else(|| default_frame_every(samples(steps, setup.save_every))),
@@ -294,7 +316,7 @@ pub fn simulate_msm(
         },
         &mut |s, x| {
             progress(s.step, steps);
-            frames.sample(s.t, |path| write_lattice_frame(path, lattice, x));
+            frames.sample(s.t, |path, _| write_lattice_frame(path, lattice, x));
         },
     );
     let key = if request.dt.is_some() {
@@ -370,7 +392,9 @@ fn finish(
             trajectory,
             vtk_every: frames.every,
             frames_capped: frames.capped && frames.every > 1,
+            pvd: format!("{}.pvd", frames.stem),
             frames: frames.written,
+            control_net_frames: frames.control_net_written,
             warnings: Vec::new(),
             stability: None,
         },
@@ -383,8 +407,9 @@ fn finish(
 /// an MSM) and their sum.
 pub const ENERGY_COLUMNS: [&str; 5] = ["t", "kinetic", "elastic", "external", "total"];
 
-/// Writes `trajectory.csv`, `energy.csv` and the `.pvd` series (`pvd` is its file name).
-pub fn write_run(out: &Path, run: &Simulated, pvd: &str) -> Result<(), Error> {
+/// Writes `trajectory.csv`, `energy.csv`, the `.pvd` series ([`Simulated::pvd`]) and, for a
+/// D-NURBS, `control_net.pvd`.
+pub fn write_run(out: &Path, run: &Simulated) -> Result<(), Error> {
     let traj = &run.trajectory;
     let mut header = vec!["t".to_string()];
     for p in 0..traj.probes.len() {
@@ -414,7 +439,14 @@ pub fn write_run(out: &Path, run: &Simulated, pvd: &str) -> Result<(), Error> {
     for (t, f) in &run.frames {
         series.push(*t, f.as_str());
     }
-    series.write(out.join(pvd))?;
+    series.write(out.join(&run.pvd))?;
+    if !run.control_net_frames.is_empty() {
+        let mut net = PvdSeries::default();
+        for (t, f) in &run.control_net_frames {
+            net.push(*t, f.as_str());
+        }
+        net.write(out.join("control_net.pvd"))?;
+    }
     Ok(())
 }
 

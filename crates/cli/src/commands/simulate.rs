@@ -72,14 +72,14 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
     };
     let bar = Progress::new(ctx.global.quiet, "", 1);
     let mut progress = |step: usize, steps: usize| bar.update(step, steps);
-    let (staged, simulated, outcome, pvd, what) = match args.model {
+    let (staged, simulated, outcome, what) = match args.model {
         ModelKind::Dnurbs => {
             let scene = Scene::from_path(&args.scene)?;
             ctx.check_resources(&scene, Job::SimulateDnurbs(timing), Some(&args.out))?;
             let staged = stage_out_dir(&args.out)?;
             let (sim, outcome) =
                 simulate_dnurbs(&scene, &request, Some(staged.path()), &mut progress)?;
-            (staged, sim, outcome, "surface.pvd", ModelKind::Dnurbs)
+            (staged, sim, outcome, ModelKind::Dnurbs)
         }
         ModelKind::Msm => {
             let setup = ctx.load_msm(
@@ -91,7 +91,7 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
             let staged = stage_out_dir(&args.out)?;
             let (sim, outcome) =
                 simulate_msm(&setup, &request, Some(staged.path()), &mut progress)?;
-            (staged, sim, outcome, "lattice.pvd", ModelKind::Msm)
+            (staged, sim, outcome, ModelKind::Msm)
         }
     };
     bar.finish();
@@ -106,7 +106,7 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
     }
     // A failed run leaves the previous one in place (the staged folder is dropped).
     let summary = outcome?;
-    write_run(staged.path(), &simulated, pvd)?;
+    write_run(staged.path(), &simulated)?;
     if summary.cancelled || ctx.cancel.load(Ordering::Relaxed) {
         let kept = staged.keep_interrupted().map_err(Error::Output)?;
         return Err(Error::CancelledKept {
@@ -169,6 +169,7 @@ pub fn run_summary(
         "t_final": summary.t_final,
         "samples": simulated.trajectory.t.len(),
         "frames": simulated.frames.len(),
+        "pvd": simulated.pvd,
         "vtk_every": simulated.vtk_every,
         "warnings": simulated.warnings,
         "out": out.display().to_string(),
