@@ -1084,3 +1084,52 @@ fn coarse_rule_warns_and_bad_fixed_point_weights_is_exit_2() {
         "{err}"
     );
 }
+
+/// `-q` hides progress and notes, never a command's result line.
+#[test]
+fn quiet_keeps_the_result_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: Vec<(Vec<std::ffi::OsString>, String)> = vec![
+        (
+            vec![
+                "matrices".into(),
+                paper().into(),
+                "--out".into(),
+                d.join("m").into(),
+            ],
+            "wrote M, D, K (105 × 105, symmetric;".to_string(),
+        ),
+        (
+            vec![
+                "refine".into(),
+                paper().into(),
+                "--insert-u".into(),
+                "0.1".into(),
+                "--out".into(),
+                d.join("r.toml").into(),
+            ],
+            "refined surface".to_string(),
+        ),
+        (
+            vec![
+                "export".into(),
+                paper().into(),
+                "--format".into(),
+                "geomdl-json".into(),
+                "--out".into(),
+                d.join("x.json").into(),
+            ],
+            "surface".to_string(),
+        ),
+    ];
+    for (args, start) in cases {
+        let out = bin().args(&args).assert().success();
+        let stdout = String::from_utf8_lossy(&out.get_output().stdout).to_string();
+        assert_eq!(stdout.lines().count(), 1, "{args:?}: {stdout}");
+        assert!(
+            stdout.starts_with(&start) && stdout.contains(" to "),
+            "{args:?}: {stdout}"
+        );
+    }
+}

@@ -126,8 +126,7 @@ pub fn run(ctx: &Context, args: ExportArgs) -> CmdResult {
             }
         }
     };
-    if ctx.verbose() {
-        println!("{what} written to {}", args.out.display());
-    }
+    // The result line: kept under -q (only progress and notes are hidden).
+    println!("{what} written to {}", args.out.display());
     Ok(())
 }

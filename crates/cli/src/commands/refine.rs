@@ -113,14 +113,13 @@ pub fn run(ctx: &Context, args: RefineArgs) -> CmdResult {
         refined.to_toml()
     );
     write_text_file(&args.out, &text)?;
-    if ctx.verbose() {
-        println!(
-            "refined {}: {} -> {}; written to {}",
-            scene.geometry.section(),
-            describe(&scene.geometry),
-            describe(&refined.geometry),
-            args.out.display()
-        );
-    }
+    // The result line: kept under -q (only progress and notes are hidden).
+    println!(
+        "refined {}: {} -> {}; written to {}",
+        scene.geometry.section(),
+        describe(&scene.geometry),
+        describe(&refined.geometry),
+        args.out.display()
+    );
     Ok(())
 }
