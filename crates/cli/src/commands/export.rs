@@ -50,7 +50,7 @@ pub struct ExportArgs {
 }
 
 /// Writes the export.
-pub fn run(ctx: &Context, args: ExportArgs) -> CmdResult {
+pub fn run(_ctx: &Context, args: ExportArgs) -> CmdResult {
     if args.tessellate.is_some() && args.format != ExportFormat::Obj {
         return Err(Error::option(
             "--tessellate",

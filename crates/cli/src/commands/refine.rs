@@ -74,7 +74,7 @@ fn describe(g: &GeometrySpec) -> String {
 }
 
 /// Refines the scene's geometry exactly and writes the scene with the finer net.
-pub fn run(ctx: &Context, args: RefineArgs) -> CmdResult {
+pub fn run(_ctx: &Context, args: RefineArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
     let refinement = Refinement {
         insert_u: args.insert_u.clone(),
