@@ -940,6 +940,20 @@ fn paper_command_runs() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
             .unwrap();
     assert!(report["paper"]["verdicts"].as_array().unwrap().len() >= 5);
+    // --json prints that report.json instead of the table.
+    let out = bin()
+        .arg("paper")
+        .arg("--json")
+        .arg("--out")
+        .arg(dir.path())
+        .assert()
+        .success();
+    let printed = json_of(&out.get_output().stdout);
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
+    assert_eq!(printed, written);
+    assert_eq!(printed["paper"]["verdicts"], report["paper"]["verdicts"]);
 }
 
 /// The built-in scene is the example file.
