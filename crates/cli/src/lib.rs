@@ -18,9 +18,31 @@ use nurbspring_scene::msm_file::{MsmSetup, is_msm_file, load_msm};
 use nurbspring_scene::resources::{Estimate, Job, Limits, Timing};
 use nurbspring_scene::{Error, Scene};
 
+/// What `nurbspring --help` says after the one-line summary.
+const LONG_ABOUT: &str = "\
+Derive mass-spring models (MSMs) that behave like Dynamic NURBS surfaces and curves.
+
+A scene file (TOML, docs/scenes.md) gives a NURBS surface or curve with its material,
+constraints, loads and initial velocity. nurbspring simulates its D-NURBS, derives the spring
+constants and node mass of a lattice on it, validates the MSM against the D-NURBS and writes
+both models out (msm.json, Matrix Market, ParaView, SOFA, NumPy).
+
+Output: eval, modes, stability and steady print JSON on stdout; the other commands print a
+result line on stdout (JSON with --json); progress, notes and warnings go to stderr; -q hides
+progress and notes. Exit codes: 0 success, 2 bad input, 1 a failed run, 130 interrupted.";
+
+/// Examples shown at the end of `nurbspring --help`.
+const EXAMPLES: &str = "\
+Examples:
+  nurbspring check examples/paper.toml
+  nurbspring derive examples/paper.toml --out out/paper
+  nurbspring simulate out/paper/msm.json --model msm --out out/msm-run
+  nurbspring simulate examples/paper.toml --model dnurbs --out out/dnurbs-run --json
+  nurbspring import part.igs --out part.toml";
+
 /// Derive mass-spring models that behave like Dynamic NURBS surfaces.
 #[derive(Parser, Debug)]
-#[command(name = "nurbspring", version, about, long_about = None)]
+#[command(name = "nurbspring", version, about, long_about = LONG_ABOUT, after_help = EXAMPLES)]
 pub struct Cli {
     #[command(flatten)]
     global: GlobalArgs,
@@ -291,6 +313,20 @@ pub fn stage_out_dir(dir: &Path) -> Result<StagedDir, Error> {
 /// Swaps a complete run in (see [`stage_out_dir`]) and returns the folder's path.
 pub fn commit_out_dir(staged: StagedDir) -> Result<PathBuf, Error> {
     staged.commit().map_err(Error::Output)
+}
+
+/// Prints the `report.json` of the output folder `out` (as written) on stdout: `derive --json`
+/// and `paper --json`.
+pub fn print_report(out: &Path) -> CmdResult {
+    let path = out.join("report.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        Error::Output(nurbspring_io::OutputError::Io {
+            path: path.clone(),
+            source: e,
+        })
+    })?;
+    println!("{}", text.trim_end());
+    Ok(())
 }
 
 /// Pretty JSON of a value, for commands that print JSON on stdout.

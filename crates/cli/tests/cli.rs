@@ -155,7 +155,27 @@ fn matrices_writes_matrix_market_and_dofs() {
     assert_eq!(dofs["n_dofs"], 105);
     assert_eq!(dofs["free_dofs"].as_array().unwrap().len(), 9);
     let m = std::fs::read_to_string(dir.path().join("M.mtx")).unwrap();
-    assert!(m.starts_with("%%MatrixMarket matrix coordinate real"));
+    assert!(m.starts_with("%%MatrixMarket matrix coordinate real symmetric\n"));
+    // Only the lower triangle, no explicit zeros; D of γ = 0 has no entries.
+    let entries = |text: &str| -> Vec<(usize, usize, f64)> {
+        text.lines()
+            .filter(|l| !l.starts_with('%'))
+            .skip(1)
+            .map(|l| {
+                let f: Vec<&str> = l.split_whitespace().collect();
+                (
+                    f[0].parse().unwrap(),
+                    f[1].parse().unwrap(),
+                    f[2].parse().unwrap(),
+                )
+            })
+            .collect()
+    };
+    let m = entries(&m);
+    assert!(!m.is_empty());
+    assert!(m.iter().all(|&(i, j, v)| i >= j && v != 0.0));
+    let d = std::fs::read_to_string(dir.path().join("D.mtx")).unwrap();
+    assert!(d.ends_with("\n105 105 0\n"), "{d}");
 }
 
 #[test]
@@ -208,6 +228,32 @@ fn simulate_dnurbs_writes_trajectory_energy_and_series() {
     assert!(dir.path().join("energy.csv").exists());
     let pvd = std::fs::read_to_string(dir.path().join("surface.pvd")).unwrap();
     assert!(pvd.contains("surface_000000.vts"));
+    // Frames carry displacement and velocity; a control-net series runs alongside.
+    let frame = std::fs::read_to_string(dir.path().join("surface_000003.vts")).unwrap();
+    assert!(frame.contains("Name=\"displacement\"") && frame.contains("Name=\"velocity\""));
+    let net = std::fs::read_to_string(dir.path().join("control_net.pvd")).unwrap();
+    assert_eq!(net.matches("<DataSet").count(), 11);
+    assert!(net.contains("file=\"control_net_000010.vtu\""));
+    let frame = std::fs::read_to_string(dir.path().join("control_net_000010.vtu")).unwrap();
+    for name in ["displacement", "velocity", "weight"] {
+        assert!(frame.contains(&format!("Name=\"{name}\"")), "{name}");
+    }
+    assert!(frame.contains("NumberOfPoints=\"35\"") && frame.contains("NumberOfCells=\"58\""));
+    // A curve's frames are polylines in .vtu files of a curve.pvd series.
+    let dir = tempfile::tempdir().unwrap();
+    let out = bin()
+        .arg("simulate")
+        .arg(examples().join("string.toml"))
+        .args(["--model", "dnurbs", "--t-end", "0.05", "--json", "--out"])
+        .arg(dir.path())
+        .assert()
+        .success();
+    assert_eq!(json_of(&out.get_output().stdout)["pvd"], "curve.pvd");
+    let pvd = std::fs::read_to_string(dir.path().join("curve.pvd")).unwrap();
+    assert!(pvd.contains("file=\"curve_000005.vtu\""), "{pvd}");
+    let frame = std::fs::read_to_string(dir.path().join("curve_000005.vtu")).unwrap();
+    assert!(frame.contains("<UnstructuredGrid>") && frame.contains("Name=\"velocity\""));
+    assert!(dir.path().join("control_net_000005.vtu").exists());
 }
 
 #[test]
@@ -248,8 +294,20 @@ fn simulate_msm_explicit_above_limit_is_refused_then_forced() {
         .code(1);
     let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
     assert!(err.contains("step"), "{err}");
-    // The implicit run is fine and prints the stability line.
+    // --force-unstable alone forces the scene's own explicit integrator: the same failure.
     let out = bin()
+        .arg("simulate")
+        .arg(paper())
+        .args(["--model", "msm", "--force-unstable", "--out"])
+        .arg(dir.path())
+        .assert()
+        .code(1);
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(err.contains("step"), "{err}");
+    // The implicit run is fine; without -q it prints the stability line on stderr, and the
+    // result line on stdout.
+    let out = Command::cargo_bin("nurbspring")
+        .unwrap()
         .arg("simulate")
         .arg(paper())
         .args([
@@ -264,8 +322,394 @@ fn simulate_msm_explicit_above_limit_is_refused_then_forced() {
         .arg(dir.path())
         .assert()
         .success();
-    assert!(String::from_utf8_lossy(&out.get_output().stdout).contains("dt_critical"));
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.get_output().stdout).to_string(),
+        String::from_utf8_lossy(&out.get_output().stderr).to_string(),
+    );
+    assert!(
+        stderr.starts_with("stability: omega_max = ") && stderr.contains("backward-euler"),
+        "{stderr}"
+    );
+    assert_eq!(
+        stdout.trim(),
+        format!(
+            "MSM run (backward-euler, 10 steps, 11 samples, 11 ParaView frames) written to {}",
+            dir.path().display()
+        )
+    );
     assert!(dir.path().join("lattice.pvd").exists());
+    // -q keeps the result line and hides the stability line.
+    let out = bin()
+        .arg("simulate")
+        .arg(paper())
+        .args([
+            "--model",
+            "msm",
+            "--integrator",
+            "newmark",
+            "--t-end",
+            "0.8",
+        ])
+        .arg("--out")
+        .arg(dir.path())
+        .assert()
+        .success();
+    assert!(out.get_output().stderr.is_empty());
+    assert!(String::from_utf8_lossy(&out.get_output().stdout).starts_with("MSM run (newmark"));
+}
+
+/// Out of the box the paper scene's MSM run (symplectic Euler at Δt = 0.08 > Δt_crit) falls
+/// back to newmark with one warning line; the summary's Δt_crit is `stability`'s.
+#[test]
+fn simulate_msm_above_the_limit_falls_back_to_newmark_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = bin()
+        .arg("simulate")
+        .arg(paper())
+        .args(["--model", "msm", "--t-end", "0.8", "--json", "--out"])
+        .arg(dir.path())
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    assert_eq!(v["model"], "msm");
+    assert_eq!(v["integrator"], "newmark");
+    assert_eq!(v["dt"], 0.08);
+    assert_eq!(v["steps"], 10);
+    assert_eq!(v["samples"], 11);
+    assert_eq!(v["frames"], 11);
+    let stability = json_of(
+        &bin()
+            .arg("stability")
+            .arg(paper())
+            .assert()
+            .success()
+            .get_output()
+            .stdout,
+    );
+    assert_eq!(v["dt_critical"], stability["dt_critical"]);
+    let dt_critical = v["dt_critical"].as_f64().unwrap();
+    assert!(dt_critical < 0.08, "{dt_critical}");
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("warning: symplectic-euler is unstable at dt = 0.08 s")
+            && stderr.contains(&format!("{dt_critical:.4e}"))
+            && stderr.contains("running newmark instead"),
+        "{stderr}"
+    );
+    assert_eq!(
+        v["warnings"][0].as_str().unwrap(),
+        stderr["warning: ".len()..].trim_end()
+    );
+    // Newmark conserves the undamped, unloaded lattice's energy closely; no load potential.
+    let rows = energy_rows(dir.path());
+    let e0 = rows[0][4];
+    for r in &rows {
+        assert_eq!(r[3], 0.0);
+        assert!((r[4] - (r[1] + r[2] + r[3])).abs() <= 1e-15 * e0, "{r:?}");
+        assert!((r[4] - e0).abs() <= 1e-2 * e0, "{r:?} vs {e0}");
+    }
+}
+
+/// The rows of `energy.csv` after checking its header.
+fn energy_rows(dir: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(dir.join("energy.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "t,kinetic,elastic,external,total");
+    lines
+        .map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect())
+        .collect()
+}
+
+/// Under gravity the elastic energy stays ≥ 0 and the load potential is its own column, for
+/// both models: the sheet falls, so the load potential decreases from its initial value.
+#[test]
+fn energy_columns_separate_elastic_and_load_potential() {
+    for model in ["dnurbs", "msm"] {
+        let dir = tempfile::tempdir().unwrap();
+        bin()
+            .arg("simulate")
+            .arg(examples().join("sheet_gravity.toml"))
+            .args(["--model", model, "--t-end", "0.2", "--out"])
+            .arg(dir.path())
+            .assert()
+            .success();
+        let rows = energy_rows(dir.path());
+        // 40 steps, a sample every 10.
+        assert_eq!(rows.len(), 5, "{model}");
+        let (first, last) = (&rows[0], &rows[rows.len() - 1]);
+        assert_eq!(first[1], 0.0, "{model}: starts at rest");
+        for r in &rows {
+            assert!(r[1] >= 0.0 && r[2] >= 0.0, "{model}: {r:?}");
+            let scale = r[1].abs() + r[2].abs() + r[3].abs();
+            assert!(
+                (r[4] - (r[1] + r[2] + r[3])).abs() <= 1e-14 * scale,
+                "{r:?}"
+            );
+        }
+        assert!(last[3] < first[3], "{model}: {first:?} -> {last:?}");
+        assert!(last[1] > 0.0 && last[2] > 0.0, "{model}: {last:?}");
+        if model == "msm" {
+            assert_eq!(
+                first[3], 0.0,
+                "the MSM's load potential is zero at the start"
+            );
+        }
+    }
+}
+
+/// Without `output.vtk_every` a long run writes at most 200 frames, evenly spaced, and says how
+/// to get more; with it, every requested frame.
+#[test]
+fn simulate_writes_at_most_200_frames_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(paper())
+        .unwrap()
+        .replace("[output]\nvtk_every = 1\n", "");
+    let p = scene(dir.path(), "long.toml", &text);
+    let out = Command::cargo_bin("nurbspring")
+        .unwrap()
+        .arg("simulate")
+        .arg(&p)
+        .args(["--model", "dnurbs", "--dt", "0.002", "--json", "--out"])
+        .arg(dir.path().join("run"))
+        .assert()
+        .success();
+    // 2000 steps, 2001 samples: a frame every ⌈2001 / 200⌉ = 11 samples, ⌈2001 / 11⌉ = 182.
+    let v = json_of(&out.get_output().stdout);
+    assert_eq!(v["samples"], 2001);
+    assert_eq!(v["vtk_every"], 11);
+    assert_eq!(v["frames"], 182);
+    let pvd = std::fs::read_to_string(dir.path().join("run/surface.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 182);
+    let second: f64 = pvd
+        .split("timestep=\"")
+        .nth(2)
+        .unwrap()
+        .split('"')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((second - 11.0 * 0.002).abs() < 1e-12, "{second}");
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(stderr.contains("output.vtk_every"), "{stderr}");
+    // The paper scene sets vtk_every = 1: a frame per sample.
+    let out = bin()
+        .arg("simulate")
+        .arg(paper())
+        .args(["--model", "dnurbs", "--json", "--out"])
+        .arg(dir.path().join("run"))
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    assert_eq!(
+        (v["samples"].as_u64(), v["frames"].as_u64()),
+        (Some(51), Some(51))
+    );
+}
+
+/// `check` warns (stderr, and `warnings` in --json) for Δt above the explicit limit, zero
+/// stiffness and a body free to move rigidly; the other examples have no warnings.
+#[test]
+fn check_warns_for_unstable_dt_zero_stiffness_and_rigid_motion() {
+    let out = bin()
+        .arg("check")
+        .arg(paper())
+        .arg("--json")
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    let w: Vec<&str> = v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_str().unwrap())
+        .collect();
+    let dt_critical = v["msm"]["dt_critical"].as_f64().unwrap();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].starts_with("simulation.dt = 0.08 is above the explicit limit")
+            && w[0].contains(&format!("dt_critical = {dt_critical:.4e} s"))
+            && w[0].contains("symplectic-euler"),
+        "{w:?}"
+    );
+    let text = bin().arg("check").arg(paper()).assert().success();
+    let stderr = String::from_utf8_lossy(&text.get_output().stderr).to_string();
+    assert_eq!(stderr.trim_end(), format!("warning: {}", w[0]));
+
+    let dir = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(examples().join("sheet_gravity.toml")).unwrap();
+    let soft = good
+        .replace("alpha11 = 20.0", "alpha11 = 0.0")
+        .replace("alpha22 = 20.0", "alpha22 = 0.0")
+        .replace("beta11 = 0.05", "beta11 = 0.0")
+        .replace("beta22 = 0.05", "beta22 = 0.0");
+    let free: String = good
+        .lines()
+        .filter(|l| !l.starts_with("fixed ="))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    for (name, text, needle) in [
+        (
+            "soft.toml",
+            soft,
+            "material: zero stiffness (alpha11, alpha22, beta11, beta12, beta22 all 0)",
+        ),
+        (
+            "free.toml",
+            free,
+            "constraints: no fixed control points and no linear constraints",
+        ),
+    ] {
+        let p = scene(dir.path(), name, &text);
+        let out = bin().arg("check").arg(&p).arg("--json").assert().success();
+        let v = json_of(&out.get_output().stdout);
+        let w = v["warnings"].as_array().unwrap();
+        assert_eq!(w.len(), 1, "{name}: {w:?}");
+        assert!(w[0].as_str().unwrap().starts_with(needle), "{name}: {w:?}");
+    }
+    for example in [
+        "sheet_gravity.toml",
+        "half_cylinder.toml",
+        "string.toml",
+        "iges_patch.toml",
+    ] {
+        let out = bin()
+            .arg("check")
+            .arg(examples().join(example))
+            .arg("--json")
+            .assert()
+            .success();
+        let v = json_of(&out.get_output().stdout);
+        assert_eq!(v["warnings"], serde_json::json!([]), "{example}");
+    }
+}
+
+/// An msm.json (or any .json) where a scene is expected: exit 2 and a message saying what the
+/// file is and which commands take it, not a TOML parse error.
+#[test]
+fn msm_json_as_a_scene_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = scene(dir.path(), "msm.json", "{\"format\": \"nurbspring-msm\"}");
+    for args in [
+        vec!["check"],
+        vec!["simulate", "--model", "dnurbs", "--out", "x"],
+        vec!["derive", "--out", "x"],
+    ] {
+        let out = bin()
+            .arg(args[0])
+            .arg(&p)
+            .args(&args[1..])
+            .current_dir(dir.path())
+            .assert()
+            .code(2);
+        let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.contains("msm.json: a JSON file, not a scene")
+                && err.contains("simulate FILE --model msm")
+                && !err.contains("TOML parse"),
+            "{args:?}: {err}"
+        );
+        assert!(!dir.path().join("x").exists());
+    }
+}
+
+/// `--integrator` lists its values; an unknown one is refused by clap (exit 2) with the list.
+#[test]
+fn integrator_values_are_listed() {
+    let out = bin().args(["simulate", "--help"]).assert().success();
+    let help = String::from_utf8_lossy(&out.get_output().stdout).to_string();
+    for name in [
+        "terzopoulos-qin",
+        "newmark",
+        "backward-euler",
+        "symplectic-euler",
+        "verlet",
+        "rk4",
+        "modal",
+    ] {
+        assert!(help.contains(&format!("- {name}:")), "{name}: {help}");
+    }
+    let out = bin()
+        .arg("simulate")
+        .arg(paper())
+        .args(["--model", "msm", "--integrator", "euler", "--out", "x"])
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        err.contains("possible values") && err.contains("backward-euler"),
+        "{err}"
+    );
+    // The top-level help explains the tool and shows an example.
+    let out = bin().arg("--help").assert().success();
+    let help = String::from_utf8_lossy(&out.get_output().stdout).to_string();
+    assert!(help.contains("Examples:") && help.contains("nurbspring derive examples/paper.toml"));
+    assert!(help.contains("--json"), "{help}");
+}
+
+/// Every command that reports numbers has --json with its report's keys.
+#[test]
+fn matrices_and_derive_print_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = bin()
+        .arg("matrices")
+        .arg(paper())
+        .args(["--json", "--out"])
+        .arg(dir.path().join("m"))
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    assert_eq!(v["dofs"], 105);
+    assert_eq!(v["free_dofs"], 9);
+    // γ = 0: D has no entries.
+    assert_eq!(v["stored_entries"]["D"], 0);
+    let k = std::fs::read_to_string(dir.path().join("m/K.mtx")).unwrap();
+    let size = k.lines().find(|l| !l.starts_with('%')).unwrap();
+    assert_eq!(size, format!("105 105 {}", v["stored_entries"]["K"]));
+    let out = bin()
+        .arg("derive")
+        .arg(paper())
+        .args(["--derivation", "paper", "--json", "--out"])
+        .arg(dir.path().join("d"))
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("d/report.json")).unwrap())
+            .unwrap();
+    assert_eq!(v, file);
+    assert!(v["derived"]["k_edge"].as_f64().unwrap() > 0.0);
+    // The figures: the mass scan's x unit and selected mass, the scene MSM's k_bend, the
+    // energy legend.
+    let svg = |name: &str| std::fs::read_to_string(dir.path().join("d").join(name)).unwrap();
+    let scan = svg("mass_scan.svg");
+    let selected = v["mass"]["selected"].as_f64().unwrap();
+    assert!(
+        scan.contains("node mass m [kg] (an eigenvalue of M)"),
+        "{scan}"
+    );
+    assert!(
+        scan.contains(&format!("selected m = {selected:.6}")),
+        "{scan}"
+    );
+    let central = svg("central_node.svg");
+    assert!(
+        central.contains("scene&apos;s MSM k_edge=2.7225, k_diag=0.8661, k_bend=0, m=0.005"),
+        "{central}"
+    );
+    let energy = svg("energy.svg");
+    // (The D-NURBS reference of the paper scene is its exact modal solution, which records
+    // no energies: only the MSM's curves are drawn.)
+    for needle in [
+        "derived MSM total (kinetic + elastic + load)",
+        "derived MSM kinetic",
+        "energy / largest kinetic + elastic energy of the model",
+    ] {
+        assert!(energy.contains(needle), "{needle}");
+    }
 }
 
 /// `derive` writes every file; msm.json is loadable by `simulate --model msm`.
@@ -496,6 +940,20 @@ fn paper_command_runs() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
             .unwrap();
     assert!(report["paper"]["verdicts"].as_array().unwrap().len() >= 5);
+    // --json prints that report.json instead of the table.
+    let out = bin()
+        .arg("paper")
+        .arg("--json")
+        .arg("--out")
+        .arg(dir.path())
+        .assert()
+        .success();
+    let printed = json_of(&out.get_output().stdout);
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
+    assert_eq!(printed, written);
+    assert_eq!(printed["paper"]["verdicts"], report["paper"]["verdicts"]);
 }
 
 /// The built-in scene is the example file.
@@ -639,4 +1097,53 @@ fn coarse_rule_warns_and_bad_fixed_point_weights_is_exit_2() {
         err.contains("bad.toml") && err.contains("constraints.fixed_point_weights = \"held\""),
         "{err}"
     );
+}
+
+/// `-q` hides progress and notes, never a command's result line.
+#[test]
+fn quiet_keeps_the_result_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: Vec<(Vec<std::ffi::OsString>, String)> = vec![
+        (
+            vec![
+                "matrices".into(),
+                paper().into(),
+                "--out".into(),
+                d.join("m").into(),
+            ],
+            "wrote M, D, K (105 × 105, symmetric;".to_string(),
+        ),
+        (
+            vec![
+                "refine".into(),
+                paper().into(),
+                "--insert-u".into(),
+                "0.1".into(),
+                "--out".into(),
+                d.join("r.toml").into(),
+            ],
+            "refined surface".to_string(),
+        ),
+        (
+            vec![
+                "export".into(),
+                paper().into(),
+                "--format".into(),
+                "geomdl-json".into(),
+                "--out".into(),
+                d.join("x.json").into(),
+            ],
+            "surface".to_string(),
+        ),
+    ];
+    for (args, start) in cases {
+        let out = bin().args(&args).assert().success();
+        let stdout = String::from_utf8_lossy(&out.get_output().stdout).to_string();
+        assert_eq!(stdout.lines().count(), 1, "{args:?}: {stdout}");
+        assert!(
+            stdout.starts_with(&start) && stdout.contains(" to "),
+            "{args:?}: {stdout}"
+        );
+    }
 }

@@ -36,11 +36,13 @@ fn names(dir: &Path) -> Vec<String> {
     v
 }
 
-/// Frame files in a folder, and the frames its `.pvd` lists.
+/// Frame files of the series `pvd` in a folder (`surface.pvd`: `surface_*.vts`), and the frames
+/// the `.pvd` lists.
 fn frames(dir: &Path, pvd: &str) -> (usize, usize) {
+    let stem = format!("{}_", pvd.trim_end_matches(".pvd"));
     let on_disk = names(dir)
         .iter()
-        .filter(|n| n.ends_with(".vts") || n.ends_with(".vtu"))
+        .filter(|n| n.starts_with(&stem) && (n.ends_with(".vts") || n.ends_with(".vtu")))
         .count();
     let listed = std::fs::read_to_string(dir.join(pvd))
         .unwrap()
@@ -69,6 +71,7 @@ fn a_shorter_rerun_leaves_no_stale_frames() {
     assert_eq!((disk, listed), (51, 51));
     simulate(&paper(), &out, "0.2").success();
     assert_eq!(frames(&out, "surface.pvd"), (21, 21));
+    assert_eq!(frames(&out, "control_net.pvd"), (21, 21));
     // Nothing beside the folder: no staging or parked folders left.
     assert_eq!(names(dir.path()), ["run"]);
 }
@@ -175,6 +178,7 @@ fn sigterm_and_sighup_stop_cleanly_and_keep_the_previous_run() {
                 "--model", "dnurbs", "--dt", "0.0001", "--t-end", "1000", "--out",
             ])
             .arg(&out)
+            .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
@@ -197,6 +201,27 @@ fn sigterm_and_sighup_stop_cleanly_and_keep_the_previous_run() {
             std::thread::sleep(Duration::from_millis(20));
         };
         assert_eq!(code, Some(130), "SIG{signal}");
+        // One line on stderr, saying where the samples are; nothing "written" on stdout.
+        let (mut stdout, mut stderr) = (String::new(), String::new());
+        use std::io::Read;
+        child
+            .stdout
+            .take()
+            .unwrap()
+            .read_to_string(&mut stdout)
+            .unwrap();
+        child
+            .stderr
+            .take()
+            .unwrap()
+            .read_to_string(&mut stderr)
+            .unwrap();
+        assert!(stdout.is_empty(), "SIG{signal}: {stdout}");
+        assert_eq!(stderr.lines().count(), 1, "SIG{signal}: {stderr}");
+        assert!(
+            stderr.starts_with("error: interrupted: ") && stderr.contains("run.interrupted"),
+            "SIG{signal}: {stderr}"
+        );
         assert_eq!(
             std::fs::read(out.join("trajectory.csv")).unwrap(),
             before,

@@ -69,7 +69,7 @@ pub fn record(
         for (i, probe) in traj.probes.iter_mut().enumerate() {
             probe.push([points[3 * i], points[3 * i + 1], points[3 * i + 2]]);
         }
-        traj.energy.push([s.kinetic, s.potential]);
+        traj.energy.push([s.kinetic, s.elastic, s.external]);
         hook(s, full);
     };
     let outcome = match watched {

@@ -10,8 +10,9 @@ pub struct Trajectory {
     pub t: Vec<f64>,
     /// `probes[p][s]`: position of probe `p` at sample `s`.
     pub probes: Vec<Vec<[f64; 3]>>,
-    /// `[kinetic, potential]` energy at each sample.
-    pub energy: Vec<[f64; 2]>,
+    /// `[kinetic, elastic, external]` energy at each sample: the elastic energy excludes the
+    /// load, `external` is the load's potential; their sum is the total energy.
+    pub energy: Vec<[f64; 3]>,
     /// Set when the run stopped early (diverged, unstable or cancelled), with the reason.
     pub stopped: Option<String>,
 }

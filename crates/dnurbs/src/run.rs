@@ -4,7 +4,9 @@
 
 use std::sync::atomic::Ordering;
 
-use nurbspring_sim::{IntegratorKind, Observer, RunOptions, RunSummary, Sample, State, simulate};
+use nurbspring_sim::{
+    DynamicModel, IntegratorKind, Observer, RunOptions, RunSummary, Sample, State, simulate,
+};
 
 use crate::{Assembler, DnurbsError, DnurbsModel, DnurbsOptions, Material, RationalStepper};
 
@@ -71,7 +73,8 @@ impl DnurbsModel {
     /// weights-as-unknowns Terzopoulos–Qin step of [`RationalStepper`] (any other integrator is
     /// refused by [`integrator_problem`]); its samples carry the energies of the current shape,
     /// `½ ṗᵀ M(p) ṗ` and `½ (p − p_rest)ᵀ K(p) (p − p_rest)`, with M and K assembled at the
-    /// sample's own `p` and the velocity at the sample's own time (docs/math.md §3).
+    /// sample's own `p` and the velocity at the sample's own time (docs/math.md §3), and the
+    /// load potential `−qᵀ f` of the load `f` assembled on the initial shape.
     /// The run stops after the current step when `opts.cancel` is set.
     pub fn simulate(
         &self,
@@ -92,14 +95,17 @@ impl DnurbsModel {
         opts.validate(initial.t)?;
         let assembler = Assembler::new(&self.geometry, &self.options)?;
         let energy = |q: &[f64], v: &[f64]| self.energies_with(&assembler, q, v);
-        let (kinetic, potential) = energy(&initial.q, &initial.v)?;
+        let (kinetic, elastic) = energy(&initial.q, &initial.v)?;
+        let external = self.external_potential(initial.t, &initial.q);
         observer.observe(&Sample {
             step: 0,
             t: initial.t,
             q: &initial.q,
             v: &initial.v,
             kinetic,
-            potential,
+            potential: elastic + external,
+            elastic,
+            external,
         });
         let mut summary = RunSummary {
             steps: 0,
@@ -121,7 +127,8 @@ impl DnurbsModel {
             }
             stepper.step()?;
             let s = stepper.state();
-            let (kinetic, potential) = energy(&s.q, &s.v)?;
+            let (kinetic, elastic) = energy(&s.q, &s.v)?;
+            let external = self.external_potential(s.t, &s.q);
             summary.steps += 1;
             summary.t_final = s.t;
             observer.observe(&Sample {
@@ -130,7 +137,9 @@ impl DnurbsModel {
                 q: &s.q,
                 v: &s.v,
                 kinetic,
-                potential,
+                potential: elastic + external,
+                elastic,
+                external,
             });
         }
         Ok(summary)

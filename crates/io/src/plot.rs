@@ -279,19 +279,23 @@ pub fn plot_series_with(
             let mut svg = String::new();
             {
                 let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-                draw(&root, options, &caption, &clean).map_err(plot_err)?;
+                draw(&root, options, &caption, &clean, 1).map_err(plot_err)?;
                 root.present().map_err(|e| plot_err(e.to_string()))?;
             }
             svg.into_bytes()
         }
         Format::Png => {
+            // plotters' bitmap backend draws lines and markers without anti-aliasing: draw at
+            // SUPERSAMPLE times the size and average down (a box filter over each block).
             let (w, h) = size;
-            let mut rgb = vec![0u8; w as usize * h as usize * 3];
+            let (sw, sh) = (w * SUPERSAMPLE, h * SUPERSAMPLE);
+            let mut big = vec![0u8; sw as usize * sh as usize * 3];
             {
-                let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
-                draw(&root, options, &caption, &clean).map_err(plot_err)?;
+                let root = BitMapBackend::with_buffer(&mut big, (sw, sh)).into_drawing_area();
+                draw(&root, options, &caption, &clean, SUPERSAMPLE).map_err(plot_err)?;
                 root.present().map_err(|e| plot_err(e.to_string()))?;
             }
+            let rgb = box_downsample(&big, w, h, SUPERSAMPLE);
             let mut png = Vec::new();
             image::ImageEncoder::write_image(
                 image::codecs::png::PngEncoder::new(&mut png),
@@ -306,6 +310,32 @@ pub fn plot_series_with(
     };
     write_atomic_bytes(path, &bytes)?;
     Ok(summary)
+}
+
+/// PNG figures are drawn at this many times their size and averaged down (anti-aliasing).
+pub const SUPERSAMPLE: u32 = 3;
+
+/// Averages each `k × k` block of the RGB image `big` (`w·k × h·k` pixels) into one pixel.
+fn box_downsample(big: &[u8], w: u32, h: u32, k: u32) -> Vec<u8> {
+    let (w, h, k) = (w as usize, h as usize, k as usize);
+    let stride = w * k * 3;
+    let mut out = vec![0u8; w * h * 3];
+    let n = (k * k) as u32;
+    for y in 0..h {
+        for x in 0..w {
+            for c in 0..3 {
+                let mut sum = 0u32;
+                for dy in 0..k {
+                    let row = (y * k + dy) * stride;
+                    for dx in 0..k {
+                        sum += u32::from(big[row + (x * k + dx) * 3 + c]);
+                    }
+                }
+                out[(y * w + x) * 3 + c] = ((sum + n / 2) / n) as u8;
+            }
+        }
+    }
+    out
 }
 
 /// Axis range covering `values` with a 5 % margin (a unit range when empty or degenerate).
@@ -383,32 +413,44 @@ fn legend_corner(series: &[Series], log_y: bool) -> SeriesLabelPosition {
     best.1
 }
 
-/// Draws the whole figure on `root`.
+/// An axis label for a whole number, none between two (`3` for 3.0, empty for 2.5).
+fn integer_label(v: &f64) -> String {
+    let r = v.round();
+    if (v - r).abs() <= 1e-9 * r.abs().max(1.0) {
+        format!("{:.0}", r + 0.0)
+    } else {
+        String::new()
+    }
+}
+
+/// Draws the whole figure on `root`, whose pixels are `px` times those of the figure (sizes,
+/// widths and fonts scale with it).
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     options: &PlotOptions,
     caption: &str,
     series: &[Series],
+    px: u32,
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let x_range = linear_range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
     let y_values = || series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
     let mut builder = ChartBuilder::on(root);
     builder
-        .caption(caption, (FONT_FAMILY, 24))
-        .margin(16)
-        .x_label_area_size(48)
-        .y_label_area_size(80);
+        .caption(caption, (FONT_FAMILY, 24 * px))
+        .margin(16 * px)
+        .x_label_area_size(48 * px)
+        .y_label_area_size(80 * px);
     if options.log_y {
         let chart = builder
             .build_cartesian_2d(x_range, log_range(y_values()).log_scale())
             .map_err(|e| e.to_string())?;
-        fill_chart(chart, options, series)
+        fill_chart(chart, options, series, px)
     } else {
         let chart = builder
             .build_cartesian_2d(x_range, linear_range(y_values()))
             .map_err(|e| e.to_string())?;
-        fill_chart(chart, options, series)
+        fill_chart(chart, options, series, px)
     }
 }
 
@@ -417,6 +459,7 @@ fn fill_chart<'a, DB, Y>(
     mut chart: ChartContext<'a, DB, Cartesian2d<<Range<f64> as AsRangedCoord>::CoordDescType, Y>>,
     options: &PlotOptions,
     series: &[Series],
+    px: u32,
 ) -> Result<(), String>
 where
     DB: DrawingBackend + 'a,
@@ -425,15 +468,20 @@ where
     let x_span = chart.x_range();
     let integer_ticks = (x_span.end.floor() - x_span.start.ceil()).max(0.0) as usize + 1;
     let mut mesh = chart.configure_mesh();
-    if options.integer_x && integer_ticks <= 12 {
-        mesh.x_labels(integer_ticks)
-            .x_label_formatter(&|v: &f64| format!("{v:.0}"));
+    if options.integer_x {
+        // Whole numbers only: a tick between two integers gets no label.
+        mesh.x_labels(integer_ticks.clamp(2, 12))
+            .x_label_formatter(&integer_label);
     }
+    let (d, t) = (px as i32, px);
     mesh.x_desc(options.x_label.as_str())
         .y_desc(options.y_label.as_str())
-        .label_style((FONT_FAMILY, 14))
-        .axis_desc_style((FONT_FAMILY, 16))
-        .light_line_style(RGBColor(235, 235, 235))
+        .label_style((FONT_FAMILY, 14 * t))
+        .axis_desc_style((FONT_FAMILY, 16 * t))
+        .set_all_tick_mark_size(5 * t)
+        .axis_style(BLACK.stroke_width(t))
+        .bold_line_style(BLACK.mix(0.2).stroke_width(t))
+        .light_line_style(RGBColor(235, 235, 235).stroke_width(t))
         .draw()
         .map_err(|e| e.to_string())?;
     for (k, s) in series.iter().enumerate() {
@@ -445,11 +493,11 @@ where
             let anno = chart
                 .draw_series(LineSeries::new(
                     s.points.iter().copied(),
-                    color.stroke_width(2),
+                    color.stroke_width(2 * t),
                 ))
                 .map_err(|e| e.to_string())?;
             anno.label(s.name.as_str()).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                PathElement::new(vec![(x, y), (x + 20 * d, y)], color.stroke_width(2 * t))
             });
         }
         if has_markers {
@@ -458,30 +506,31 @@ where
             match marker {
                 0 => {
                     let anno = chart
-                        .draw_series(pts.map(|p| Circle::new(p, 4, color.filled())))
+                        .draw_series(pts.map(|p| Circle::new(p, 4 * t, color.filled())))
                         .map_err(|e| e.to_string())?;
                     if !has_line {
-                        anno.label(label)
-                            .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+                        anno.label(label).legend(move |(x, y)| {
+                            Circle::new((x + 10 * d, y), 4 * t, color.filled())
+                        });
                     }
                 }
                 1 => {
                     let anno = chart
-                        .draw_series(pts.map(|p| Cross::new(p, 5, color.stroke_width(2))))
+                        .draw_series(pts.map(|p| Cross::new(p, 5 * t, color.stroke_width(2 * t))))
                         .map_err(|e| e.to_string())?;
                     if !has_line {
                         anno.label(label).legend(move |(x, y)| {
-                            Cross::new((x + 10, y), 5, color.stroke_width(2))
+                            Cross::new((x + 10 * d, y), 5 * t, color.stroke_width(2 * t))
                         });
                     }
                 }
                 _ => {
                     let anno = chart
-                        .draw_series(pts.map(|p| TriangleMarker::new(p, 5, color.filled())))
+                        .draw_series(pts.map(|p| TriangleMarker::new(p, 5 * t, color.filled())))
                         .map_err(|e| e.to_string())?;
                     if !has_line {
                         anno.label(label).legend(move |(x, y)| {
-                            TriangleMarker::new((x + 10, y), 5, color.filled())
+                            TriangleMarker::new((x + 10 * d, y), 5 * t, color.filled())
                         });
                     }
                 }
@@ -491,12 +540,46 @@ where
     if !series.is_empty() {
         chart
             .configure_series_labels()
-            .label_font((FONT_FAMILY, 14))
+            .label_font((FONT_FAMILY, 14 * t))
+            .legend_area_size(30 * t)
+            .margin(5 * t)
             .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
+            .border_style(BLACK.stroke_width(t))
             .position(legend_corner(series, options.log_y))
             .draw()
             .map_err(|e| e.to_string())?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn integer_labels_only_at_whole_numbers() {
+        assert_eq!(integer_label(&3.0), "3");
+        assert_eq!(integer_label(&-0.0), "0");
+        assert_eq!(integer_label(&(0.1 + 0.2 + 2.7)), "3");
+        assert_eq!(integer_label(&2.5), "");
+        assert_eq!(integer_label(&17.25), "");
+    }
+
+    #[test]
+    fn box_downsample_averages_blocks() {
+        // 2 × 1 pixels from a 4 × 2 image at k = 2: a white and a black block, then a mixed one.
+        let mut big = vec![0u8; 4 * 2 * 3];
+        for (i, px) in big.chunks_mut(3).enumerate() {
+            let (x, y) = (i % 4, i / 4);
+            let v = match (x, y) {
+                (0 | 1, _) => 255,
+                (2, 0) => 255,
+                _ => 0,
+            };
+            px.copy_from_slice(&[v, v, v]);
+        }
+        let small = box_downsample(&big, 2, 1, 2);
+        // (255·4)/4 = 255 and (255 + 0 + 0 + 0)/4 = 63.75 → 64.
+        assert_eq!(small, vec![255, 255, 255, 64, 64, 64]);
+    }
 }

@@ -163,6 +163,92 @@ fn spectrum_plot_has_both_sets() {
     }
 }
 
+/// The texts of an SVG's `<text>` elements.
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let body = t.split_once('>')?.1;
+            Some(body.split("</text>").next()?.trim().to_string())
+        })
+        .collect()
+}
+
+/// Thirty modes: the mode axis is labelled with whole numbers only.
+#[test]
+fn spectrum_mode_axis_has_integer_labels() {
+    let (_keep, dir) = out_dir();
+    let omega: Vec<f64> = (1..=30).map(|k| 100.0 * k as f64).collect();
+    let p = dir.join("spectrum30.svg");
+    plot_spectrum(
+        &p,
+        "Eigenfrequencies",
+        "omega [rad/s]",
+        &[("D-NURBS", &omega)],
+    )
+    .unwrap();
+    let texts = svg_texts(&std::fs::read_to_string(&p).unwrap());
+    let numbers: Vec<f64> = texts.iter().filter_map(|t| t.parse::<f64>().ok()).collect();
+    // Mode labels lie in 1..=30; the omega labels are multiples of 100 or more.
+    let modes: Vec<&String> = texts
+        .iter()
+        .filter(|t| t.parse::<f64>().is_ok_and(|x| x > 0.0 && x <= 31.0))
+        .collect();
+    assert!(modes.len() >= 4, "{texts:?}");
+    for m in &modes {
+        assert!(
+            m.parse::<u32>().is_ok(),
+            "mode label {m:?} is not an integer: {texts:?}"
+        );
+    }
+    assert!(numbers.iter().any(|&x| x >= 100.0), "{texts:?}");
+}
+
+/// PNG lines are anti-aliased: the ink of a straight 2-pixel line (its coverage summed over
+/// each pixel column) is the same all along it, where an aliased line steps between 1 and 3
+/// pixels.
+#[test]
+fn png_lines_are_anti_aliased() {
+    let (_keep, dir) = out_dir();
+    let p = dir.join("diagonal.png");
+    let line = Series::line(
+        "line",
+        (0..=10).map(|k| (k as f64, 0.7 * k as f64)).collect(),
+    );
+    plot_series(&p, "", "x", "y", &[line]).unwrap();
+    let (w, h, px) = decode(&p);
+    // Coverage α of a pixel blended from white towards the first colour (31, 119, 180).
+    let alpha = |c: &[u8; 3]| {
+        let a = (255.0 - f64::from(c[0])) / 224.0;
+        let fits = (f64::from(c[1]) - (255.0 - 136.0 * a)).abs() < 12.0
+            && (f64::from(c[2]) - (255.0 - 75.0 * a)).abs() < 12.0;
+        if fits && a > 0.15 { a.min(1.0) } else { 0.0 }
+    };
+    // Columns well inside the plot, away from the grid lines (which hide part of the line).
+    let mut ink = Vec::new();
+    for x in (200..800).step_by(7) {
+        let column: Vec<f64> = (0..h as usize)
+            .map(|y| alpha(&px[y * w as usize + x]))
+            .collect();
+        // A vertical grid line greys most of its column.
+        let grey = (0..h as usize)
+            .filter(|&y| {
+                let c = px[y * w as usize + x];
+                c[0] == c[1] && c[1] == c[2] && c[0] < 250
+            })
+            .count();
+        let grid = grey > h as usize / 2;
+        if !grid {
+            ink.push(column.iter().sum::<f64>());
+        }
+    }
+    let n = ink.len() as f64;
+    let mean = ink.iter().sum::<f64>() / n;
+    let sd = (ink.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt();
+    assert!(ink.len() > 40, "{ink:?}");
+    assert!(sd <= 0.1 * mean, "ink per column {mean} ± {sd}: {ink:?}");
+}
+
 #[test]
 fn bad_extension_and_size_are_refused() {
     let dir = tempfile::tempdir().unwrap();

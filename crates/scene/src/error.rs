@@ -72,6 +72,19 @@ pub enum Error {
     /// The work was interrupted (Ctrl-C or a signal).
     #[error("interrupted")]
     Cancelled,
+    /// A run interrupted after some samples: the output folder was left as it was and what was
+    /// computed kept aside.
+    #[error(
+        "interrupted: {} is as it was; the samples computed so far are in {}",
+        out.display(),
+        kept.display()
+    )]
+    CancelledKept {
+        /// The output folder, unchanged.
+        out: PathBuf,
+        /// Where the interrupted run's files are.
+        kept: PathBuf,
+    },
 }
 
 impl Error {
@@ -85,7 +98,7 @@ impl Error {
             Error::MsmFile { source, .. } => source.kind(),
             Error::Model { source, .. } => source.kind(),
             Error::Output(_) => ErrorKind::Run,
-            Error::Cancelled => ErrorKind::Cancelled,
+            Error::Cancelled | Error::CancelledKept { .. } => ErrorKind::Cancelled,
         }
     }
 

@@ -116,6 +116,59 @@ pub fn write_geometry_frame(
     p: &[f64],
     dofs_per_point: usize,
 ) -> Result<(), Error> {
+    write_geometry_frame_with(path, geometry, p, None, dofs_per_point)
+}
+
+/// The velocity `d c(p(t)) / dt = Σ_k (∂c/∂p_k) ṗ_k` of the surface points of
+/// [`Geometry::uniform_samples`]-style grids: with constant weights `c` is linear in the control
+/// points, so it is the geometry with control points `ṗ` (same weights) evaluated there; with
+/// weights as unknowns a central difference of `c(p ± h ṗ)` (`h ‖ṗ‖∞ = 10⁻⁶ max(1, ‖p‖∞)`).
+fn point_velocities(
+    geometry: &Geometry,
+    p: &[f64],
+    velocity: &[f64],
+    dofs_per_point: usize,
+    sample: &dyn Fn(&Geometry) -> Result<Vec<[f64; 3]>, Error>,
+) -> Result<Vec<[f64; 3]>, Error> {
+    if dofs_per_point == 3 {
+        return sample(&geometry_at(geometry, velocity, 3)?);
+    }
+    let vmax = velocity.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if vmax == 0.0 {
+        return Ok(vec![[0.0; 3]; sample(&geometry_at(geometry, p, 4)?)?.len()]);
+    }
+    let pmax = p.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+    let h = 1e-6 * pmax / vmax;
+    let shifted = |sign: f64| -> Vec<f64> {
+        p.iter()
+            .zip(velocity)
+            .map(|(a, b)| a + sign * h * b)
+            .collect()
+    };
+    let plus = sample(&geometry_at(geometry, &shifted(1.0), 4)?)?;
+    let minus = sample(&geometry_at(geometry, &shifted(-1.0), 4)?)?;
+    Ok(plus
+        .iter()
+        .zip(&minus)
+        .map(|(a, b)| {
+            [
+                (a[0] - b[0]) / (2.0 * h),
+                (a[1] - b[1]) / (2.0 * h),
+                (a[2] - b[2]) / (2.0 * h),
+            ]
+        })
+        .collect())
+}
+
+/// [`write_geometry_frame`] with, when `velocity` (ṗ, the layout of `p`) is given, the points'
+/// `velocity` as a second point array.
+pub fn write_geometry_frame_with(
+    path: &Path,
+    geometry: &Geometry,
+    p: &[f64],
+    velocity: Option<&[f64]>,
+    dofs_per_point: usize,
+) -> Result<(), Error> {
     let g = geometry_at(geometry, p, dofs_per_point)?;
     let run = |e: nurbspring_geom::GeomError| {
         Error::Output(OutputError::InvalidData {
@@ -137,24 +190,104 @@ pub fn write_geometry_frame(
             let mut grid = VtkStructured::new(nu, nv, pts);
             grid.point_data
                 .push(DataArray::vectors("displacement", &disp));
+            if let Some(v) = velocity {
+                let sample = |g: &Geometry| match g {
+                    Geometry::Surface(s) => Ok(s.uniform_grid(nu, nv).map_err(run)?.2),
+                    Geometry::Curve(_) => Err(shape_mismatch(path)),
+                };
+                let vel = point_velocities(geometry, p, v, dofs_per_point, &sample)?;
+                grid.point_data.push(DataArray::vectors("velocity", &vel));
+            }
             Ok(grid.write(path)?)
         }
-        (Geometry::Curve(c), _) => {
+        (Geometry::Curve(c), Geometry::Curve(rest)) => {
             let n = SAMPLES_PER_SPAN * c.basis().knots().nonempty_spans().len() + 1;
             let pts = curve_points(c, n).map_err(run)?;
+            let before = curve_points(rest, n).map_err(run)?;
+            let disp: Vec<[f64; 3]> = before
+                .iter()
+                .zip(&pts)
+                .map(|(x, y)| [y[0] - x[0], y[1] - x[1], y[2] - x[2]])
+                .collect();
             let mut grid = VtkUnstructured::new(pts);
             grid.cells.push(Cell::PolyLine((0..n).collect()));
+            grid.point_data
+                .push(DataArray::vectors("displacement", &disp));
+            if let Some(v) = velocity {
+                let sample = |g: &Geometry| match g {
+                    Geometry::Curve(c) => curve_points(c, n).map_err(run),
+                    Geometry::Surface(_) => Err(shape_mismatch(path)),
+                };
+                let vel = point_velocities(geometry, p, v, dofs_per_point, &sample)?;
+                grid.point_data.push(DataArray::vectors("velocity", &vel));
+            }
             Ok(grid.write(path)?)
         }
         _ => unreachable_shape(path),
     }
 }
 
+/// The control net at coordinates `p` (velocities `velocity`, same layout) as an unstructured
+/// grid: one point per control point (`k = i n_v + j`), lines between neighbours along u and v
+/// (a polyline for a curve), with point arrays `displacement` (from `p0`), `velocity` and
+/// `weight`.
+pub fn control_net_grid(
+    geometry: &Geometry,
+    p: &[f64],
+    velocity: &[f64],
+    p0: &[f64],
+    dofs_per_point: usize,
+) -> VtkUnstructured {
+    let d = dofs_per_point;
+    let n = geometry.n_control_points();
+    let xyz = |v: &[f64], k: usize| [v[d * k], v[d * k + 1], v[d * k + 2]];
+    let points: Vec<[f64; 3]> = (0..n).map(|k| xyz(p, k)).collect();
+    let mut grid = VtkUnstructured::new(points.clone());
+    match geometry {
+        Geometry::Surface(s) => {
+            let (nu, nv) = (s.n_u(), s.n_v());
+            for i in 0..nu {
+                for j in 0..nv {
+                    let k = i * nv + j;
+                    if i + 1 < nu {
+                        grid.cells.push(Cell::Line([k, k + nv]));
+                    }
+                    if j + 1 < nv {
+                        grid.cells.push(Cell::Line([k, k + 1]));
+                    }
+                }
+            }
+        }
+        Geometry::Curve(_) => grid.cells.push(Cell::PolyLine((0..n).collect())),
+    }
+    let disp: Vec<[f64; 3]> = (0..n)
+        .map(|k| {
+            let (a, b) = (xyz(p, k), xyz(p0, k));
+            [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+        })
+        .collect();
+    grid.point_data
+        .push(DataArray::vectors("displacement", &disp));
+    let vel: Vec<[f64; 3]> = (0..n).map(|k| xyz(velocity, k)).collect();
+    grid.point_data.push(DataArray::vectors("velocity", &vel));
+    let weights: Vec<f64> = if d == 4 {
+        (0..n).map(|k| p[4 * k + 3]).collect()
+    } else {
+        geometry.weights().to_vec()
+    };
+    grid.point_data.push(DataArray::scalars("weight", weights));
+    grid
+}
+
 fn unreachable_shape(path: &Path) -> Result<(), Error> {
-    Err(Error::Output(OutputError::InvalidData {
+    Err(shape_mismatch(path))
+}
+
+fn shape_mismatch(path: &Path) -> Error {
+    Error::Output(OutputError::InvalidData {
         path: path.to_path_buf(),
         message: "a surface and a curve cannot be compared".to_string(),
-    }))
+    })
 }
 
 fn curve_points(
@@ -300,19 +433,40 @@ pub struct DofsFile<'a> {
     pub matrices_cover: &'static str,
 }
 
+/// What [`write_matrices`] wrote.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct MatricesWritten {
+    /// Rows (= columns) of M, D and K: every dof.
+    pub dofs: usize,
+    /// Free dofs.
+    pub free_dofs: usize,
+    /// Entries stored in each file (`symmetric`: the non-zeros with row ≥ column).
+    pub stored_entries: std::collections::BTreeMap<&'static str, usize>,
+    /// The files.
+    pub files: Vec<&'static str>,
+}
+
+/// The entries a `symmetric` Matrix Market file of `a` stores.
+fn lower_nonzeros(a: &nurbspring_sim::SparseMatrix) -> usize {
+    a.triplets().filter(|&(i, j, v)| i >= j && v != 0.0).count()
+}
+
 /// `M.mtx`, `D.mtx`, `K.mtx`, `f.mtx` and `dofs.json` of a D-NURBS model.
 pub fn write_matrices(
     out: &Path,
     model: &nurbspring_dnurbs::DnurbsModel,
     scene_label: &str,
-) -> Result<(), Error> {
-    use nurbspring_io::output::{write_json, write_matrix_market, write_matrix_market_vector};
+) -> Result<MatricesWritten, Error> {
+    use nurbspring_io::output::{
+        write_json, write_matrix_market_symmetric, write_matrix_market_vector,
+    };
     let m = model.matrices();
     let ordering = dof_ordering(m.dofs_per_point);
     let comment = format!("nurbspring D-NURBS matrix of {scene_label}; dof ordering: {ordering}");
-    write_matrix_market(out.join("M.mtx"), &m.mass, &comment)?;
-    write_matrix_market(out.join("D.mtx"), &m.damping, &comment)?;
-    write_matrix_market(out.join("K.mtx"), &m.stiffness, &comment)?;
+    // M, D and K are symmetric: the lower triangle's non-zeros only.
+    write_matrix_market_symmetric(out.join("M.mtx"), &m.mass, &comment)?;
+    write_matrix_market_symmetric(out.join("D.mtx"), &m.damping, &comment)?;
+    write_matrix_market_symmetric(out.join("K.mtx"), &m.stiffness, &comment)?;
     write_matrix_market_vector(out.join("f.mtx"), &m.force, &comment)?;
     let dof_map = model.dof_map();
     write_json(
@@ -329,7 +483,19 @@ pub fn write_matrices(
             matrices_cover: "all dofs, before constraints are applied",
         },
     )?;
-    Ok(())
+    Ok(MatricesWritten {
+        dofs: dof_map.n_total(),
+        free_dofs: dof_map.n_free(),
+        stored_entries: [
+            ("M", lower_nonzeros(&m.mass)),
+            ("D", lower_nonzeros(&m.damping)),
+            ("K", lower_nonzeros(&m.stiffness)),
+            ("f", m.force.len()),
+        ]
+        .into_iter()
+        .collect(),
+        files: vec!["M.mtx", "D.mtx", "K.mtx", "f.mtx", "dofs.json"],
+    })
 }
 
 /// `steady.vts` (the deformed surface) and `steady.csv` (its control points) of a steady
@@ -349,4 +515,105 @@ pub fn write_steady(
     };
     write_csv(out.join("steady.csv"), header, rows)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// docs/scenes.md names the integer `kind` of lattice frames: its mapping is
+    /// `Class::SPRINGS`' order.
+    #[test]
+    fn lattice_kind_codes_are_documented() {
+        let docs = include_str!("../../../docs/scenes.md");
+        let names: Vec<String> = Class::SPRINGS
+            .iter()
+            .enumerate()
+            .map(|(k, c)| format!("`{k}` {}", c.name()))
+            .collect();
+        for n in &names {
+            assert!(docs.contains(n.as_str()), "docs/scenes.md lacks {n}");
+        }
+    }
+
+    fn paper_model() -> nurbspring_dnurbs::DnurbsModel {
+        crate::Scene::paper().unwrap().build_dnurbs().unwrap()
+    }
+
+    fn surface_samples(g: &Geometry) -> Result<Vec<[f64; 3]>, Error> {
+        match g {
+            Geometry::Surface(s) => Ok(s.uniform_grid(5, 4).unwrap().2),
+            Geometry::Curve(_) => Err(shape_mismatch(Path::new(""))),
+        }
+    }
+
+    /// A uniform control-point velocity moves every surface point with it (partition of
+    /// unity); with weights as unknowns the central difference agrees with the exact linear
+    /// velocity of constant weights.
+    #[test]
+    fn surface_point_velocities() {
+        let model = paper_model();
+        let g = model.geometry();
+        let p = model.p0().to_vec();
+        let n = g.n_control_points();
+        let v: Vec<f64> = (0..n).flat_map(|_| [0.0, 0.0, -0.2]).collect();
+        let exact = point_velocities(g, &p, &v, 3, &surface_samples).unwrap();
+        assert_eq!(exact.len(), 20);
+        for x in &exact {
+            assert!(x[0].abs() < 1e-15 && x[1].abs() < 1e-15, "{x:?}");
+            assert!((x[2] + 0.2).abs() < 1e-14, "{x:?}");
+        }
+        // A non-uniform velocity: the exact and the central-difference paths agree.
+        let v: Vec<f64> = (0..3 * n)
+            .map(|i| ((i * 7) % 5) as f64 * 0.1 - 0.2)
+            .collect();
+        let exact = point_velocities(g, &p, &v, 3, &surface_samples).unwrap();
+        let p4: Vec<f64> = p
+            .chunks(3)
+            .zip(g.weights())
+            .flat_map(|(c, w)| [c[0], c[1], c[2], *w])
+            .collect();
+        let v4: Vec<f64> = v.chunks(3).flat_map(|c| [c[0], c[1], c[2], 0.0]).collect();
+        let diff = point_velocities(g, &p4, &v4, 4, &surface_samples).unwrap();
+        for (a, b) in exact.iter().zip(&diff) {
+            for k in 0..3 {
+                assert!((a[k] - b[k]).abs() < 1e-8, "{a:?} vs {b:?}");
+            }
+        }
+    }
+
+    /// The control net of the paper's 7 × 5 patch: 6·5 + 7·4 lines, the displacement from p0
+    /// and the velocity per control point, unit weights.
+    #[test]
+    fn control_net_carries_displacement_velocity_and_weight() {
+        let model = paper_model();
+        let g = model.geometry();
+        let p0 = model.p0().to_vec();
+        let mut p = p0.clone();
+        p[3 * 17 + 2] -= 0.05;
+        let v: Vec<f64> = (0..p.len()).map(|i| i as f64).collect();
+        let grid = control_net_grid(g, &p, &v, &p0, 3);
+        assert_eq!(grid.points.len(), 35);
+        assert_eq!(grid.cells.len(), 6 * 5 + 7 * 4);
+        assert!(grid.cells.contains(&Cell::Line([17, 22])));
+        assert!(grid.cells.contains(&Cell::Line([17, 18])));
+        assert!(
+            !grid.cells.contains(&Cell::Line([4, 5])),
+            "no line across rows"
+        );
+        let array = |name: &str| {
+            grid.point_data
+                .iter()
+                .find(|a| a.name == name)
+                .unwrap_or_else(|| panic!("{name}"))
+                .values
+                .clone()
+        };
+        let disp = array("displacement");
+        assert_eq!(&disp[3 * 17..3 * 17 + 2], &[0.0, 0.0]);
+        assert!((disp[53] + 0.05).abs() < 1e-15, "{}", disp[53]);
+        assert!(disp.iter().enumerate().all(|(i, d)| i == 53 || *d == 0.0));
+        assert_eq!(array("velocity"), v);
+        assert_eq!(array("weight"), vec![1.0; 35]);
+    }
 }

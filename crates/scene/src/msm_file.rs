@@ -41,8 +41,9 @@ pub struct MsmSetup {
     pub probe_nodes: Vec<usize>,
     /// Record a sample every n steps.
     pub save_every: usize,
-    /// Write a ParaView frame every n samples.
-    pub vtk_every: usize,
+    /// Write a ParaView frame every n samples; `None`: at most
+    /// [`crate::spec::DEFAULT_MAX_FRAMES`] frames.
+    pub vtk_every: Option<usize>,
 }
 
 /// True when `path` names an msm.json file (by its extension).
@@ -99,7 +100,7 @@ pub fn msm_setup_from_text(
         run: file.simulation.clone().unwrap_or(DEFAULT_RUN),
         probe_nodes: vec![centre],
         save_every: 1,
-        vtk_every: 1,
+        vtk_every: None,
     })
 }
 
@@ -155,7 +156,7 @@ impl Scene {
             },
             probe_nodes,
             save_every: self.simulation.save_every.max(1),
-            vtk_every: self.output.vtk_every.max(1),
+            vtk_every: self.output.vtk_every,
         })
     }
 }

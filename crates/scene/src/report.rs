@@ -309,6 +309,46 @@ fn main_axis(traj: &Trajectory) -> usize {
         .unwrap_or(2)
 }
 
+/// The mass-scan point of the selected mass `m`: the candidate nearest to it (`None` when the
+/// scan is empty or `m` is not finite).
+fn selected_point(scan: &[(f64, f64)], m: f64) -> Option<(f64, f64)> {
+    if !m.is_finite() {
+        return None;
+    }
+    scan.iter()
+        .copied()
+        .min_by(|a, b| (a.0 - m).abs().total_cmp(&(b.0 - m).abs()))
+}
+
+/// The energy plot's two curves of one model: the total (kinetic + elastic + load potential)
+/// and the kinetic energy, both divided by the model's largest kinetic + elastic energy over
+/// the run, so models whose masses differ by orders of magnitude share one axis (an MSM's
+/// energy no longer a flat line at 0 next to the D-NURBS'); a model that never moves is not
+/// scaled.
+fn energy_series(name: &str, traj: &Trajectory) -> Vec<Series> {
+    let scale = traj
+        .energy
+        .iter()
+        .map(|e| e[0] + e[1])
+        .filter(|x| x.is_finite())
+        .fold(0.0_f64, f64::max);
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    let curve = |f: &dyn Fn(&[f64; 3]) -> f64| -> Vec<(f64, f64)> {
+        traj.t
+            .iter()
+            .zip(&traj.energy)
+            .map(|(t, e)| (*t, f(e) / scale))
+            .collect()
+    };
+    vec![
+        Series::line(
+            format!("{name} total (kinetic + elastic + load)"),
+            curve(&|e| e[0] + e[1] + e[2]),
+        ),
+        Series::line(format!("{name} kinetic"), curve(&|e| e[0])),
+    ]
+}
+
 /// central_node, mass_scan, energy and spectrum plots, SVG and PNG.
 fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Error> {
     let axis = main_axis(&d.dnurbs_trajectory);
@@ -329,9 +369,10 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
         let k = |class| g.constants.value(class);
         series.push(Series::line(
             format!(
-                "scene's MSM k_edge={}, k_diag={}, m={} ({})",
+                "scene's MSM k_edge={}, k_diag={}, k_bend={}, m={} ({})",
                 k(Class::Spring(SpringKind::Structural)),
                 k(Class::Spring(SpringKind::Shear)),
+                k(Class::Spring(SpringKind::Bend)),
                 g.m,
                 g.validation.integrator
             ),
@@ -357,39 +398,39 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
         .map(|c| (c.m, c.rms))
         .collect();
     if !scan.is_empty() {
+        let mut series = vec![Series::points("candidates", scan.clone())];
+        if let Some(chosen) = selected_point(&scan, d.mass.selected) {
+            series.push(Series::points(
+                format!("selected m = {:.6}", d.mass.selected),
+                vec![chosen],
+            ));
+        }
         for ext in ["svg", "png"] {
             plot(
                 &out.join(format!("mass_scan.{ext}")),
                 "Mass candidates: eigenvalues of M vs RMS error of the central node",
-                "m (eigenvalue of M)",
+                "node mass m [kg] (an eigenvalue of M)",
                 "RMS error [m]",
-                &[Series::points("candidates", scan.clone())],
+                &series,
                 true,
             )?;
         }
     }
-    let total = |traj: &Trajectory| -> Vec<(f64, f64)> {
-        traj.t
-            .iter()
-            .zip(&traj.energy)
-            .map(|(t, e)| (*t, e[0] + e[1]))
-            .collect()
-    };
     let energy: Vec<Series> = [
-        ("D-NURBS kinetic + elastic", &d.dnurbs_trajectory),
-        ("derived MSM kinetic + elastic", &d.msm_trajectory),
+        ("D-NURBS", &d.dnurbs_trajectory),
+        ("derived MSM", &d.msm_trajectory),
     ]
     .into_iter()
     .filter(|(_, t)| !t.energy.is_empty())
-    .map(|(name, t)| Series::line(name, total(t)))
+    .flat_map(|(name, t)| energy_series(name, t))
     .collect();
     if !energy.is_empty() {
         for ext in ["svg", "png"] {
             plot(
                 &out.join(format!("energy.{ext}")),
-                &format!("Energy over time, {scene_label}"),
+                &format!("Energy over time, {scene_label}, each model relative to its own scale"),
                 "t [s]",
-                "energy [J]",
+                "energy / largest kinetic + elastic energy of the model",
                 &energy,
                 false,
             )?;
@@ -411,4 +452,40 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both curves of a model are divided by its largest kinetic + elastic energy; the total
+    /// includes the load potential.
+    #[test]
+    fn energy_series_are_relative_to_the_model_scale() {
+        let traj = Trajectory {
+            t: vec![0.0, 1.0, 2.0],
+            probes: vec![],
+            energy: vec![[4.0, 0.0, 0.0], [1.0, 2.0, -1.0], [0.0, 5.0, -2.0]],
+            stopped: None,
+        };
+        let s = energy_series("MSM", &traj);
+        assert_eq!(s[0].name, "MSM total (kinetic + elastic + load)");
+        assert_eq!(s[0].points, vec![(0.0, 0.8), (1.0, 0.4), (2.0, 0.6)]);
+        assert_eq!(s[1].name, "MSM kinetic");
+        assert_eq!(s[1].points, vec![(0.0, 0.8), (1.0, 0.2), (2.0, 0.0)]);
+        // A model at rest throughout is not scaled.
+        let rest = Trajectory {
+            energy: vec![[0.0, 0.0, 0.0]; 3],
+            ..traj
+        };
+        assert_eq!(energy_series("x", &rest)[0].points[2], (2.0, 0.0));
+    }
+
+    #[test]
+    fn selected_point_is_the_nearest_candidate() {
+        let scan = [(0.001, 3.0), (0.005, 1.0), (0.02, 2.0)];
+        assert_eq!(selected_point(&scan, 0.0049), Some((0.005, 1.0)));
+        assert_eq!(selected_point(&scan, f64::NAN), None);
+        assert_eq!(selected_point(&[], 1.0), None);
+    }
 }

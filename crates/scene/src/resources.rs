@@ -276,7 +276,7 @@ impl Scene {
         let t_end = timing.t_end.unwrap_or(self.simulation.t_end);
         let steps = (t_end / dt).ceil().clamp(1.0, nurbspring_sim::MAX_STEPS);
         let saves = (steps / self.simulation.save_every.max(1) as f64).ceil() + 1.0;
-        let frames = (saves / self.output.vtk_every.max(1) as f64).ceil();
+        let frames = (saves / self.output.frame_every(saves as usize) as f64).ceil();
         let probes = self.simulation.probes.len().max(1) as f64;
         let mut output = 0.0;
         let mut frame_count = 0.0;

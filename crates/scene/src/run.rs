@@ -11,10 +11,13 @@ use nurbspring_dnurbs::DnurbsModel;
 use nurbspring_io::output::write_csv;
 use nurbspring_io::vtk::PvdSeries;
 use nurbspring_msm::MsmModel;
-use nurbspring_sim::{IntegratorKind, RunOptions, RunSummary, SimError, check_time, step_count};
+use nurbspring_sim::{
+    IntegratorKind, RunOptions, RunSummary, SimError, StabilityLimit, check_time, step_count,
+};
 
-use crate::export::{write_geometry_frame, write_lattice_frame};
+use crate::export::{control_net_grid, write_geometry_frame_with, write_lattice_frame};
 use crate::msm_file::MsmSetup;
+use crate::spec::default_frame_every;
 use crate::{Error, Scene};
 
 /// What to change of the scene's (or file's) run settings.
@@ -43,12 +46,24 @@ pub struct Simulated {
     pub t_end: f64,
     /// Probe positions and energies of every recorded sample.
     pub trajectory: Trajectory,
+    /// The ParaView series: `surface.pvd`, `curve.pvd` or `lattice.pvd`.
+    pub pvd: String,
     /// The ParaView frames written, `(t, file name)`.
     pub frames: Vec<(f64, String)>,
+    /// The D-NURBS control-net frames (`control_net.pvd`), one per frame.
+    pub control_net_frames: Vec<(f64, String)>,
+    /// A frame was written every `vtk_every` samples.
+    pub vtk_every: usize,
+    /// True when `vtk_every > 1` was chosen by default (no `output.vtk_every`) to keep the
+    /// frame count at most [`crate::spec::DEFAULT_MAX_FRAMES`].
+    pub frames_capped: bool,
     /// The run's summary (steps taken, cancellation).
     pub summary: Option<RunSummary>,
-    /// Warnings about the model (e.g. the quadrature's estimated error).
+    /// Warnings about the model (e.g. the quadrature's estimated error) or the run (an explicit
+    /// integrator replaced by an implicit one, [`explicit_fallback`]).
     pub warnings: Vec<String>,
+    /// An MSM's explicit stability limit at its initial state.
+    pub stability: Option<StabilityLimit>,
 }
 
 /// Where a value of a run came from: a key of the scene or file, or an option.
@@ -109,19 +124,31 @@ fn integrator_error(
     }
 }
 
+/// Samples a run of `steps` steps records, keeping every `save_every`-th (and step 0).
+fn samples(steps: usize, save_every: usize) -> usize {
+    steps / save_every.max(1) + 1
+}
+
 /// Sample and frame bookkeeping shared by both models.
 struct Frames<'a> {
     out: Option<&'a Path>,
+    /// `surface` (`.vts`), `curve` or `lattice` (`.vtu`).
     stem: &'static str,
+    /// Also a `control_net_NNNNNN.vtu` frame per frame (D-NURBS).
+    control_net: bool,
+    control_net_written: Vec<(f64, String)>,
     every: usize,
+    /// `every` was chosen to write at most [`crate::spec::DEFAULT_MAX_FRAMES`] frames.
+    capped: bool,
     samples: usize,
     written: Vec<(f64, String)>,
     error: Option<Error>,
 }
 
 impl Frames<'_> {
-    /// Called once per recorded sample; writes a frame every `every` samples.
-    fn sample(&mut self, t: f64, write: impl FnOnce(&Path) -> Result<(), Error>) {
+    /// Called once per recorded sample; writes a frame every `every` samples:
+    /// `write(frame path, control-net frame path)` (the second is used with `control_net`).
+    fn sample(&mut self, t: f64, write: impl FnOnce(&Path, &Path) -> Result<(), Error>) {
         let index = self.samples;
         self.samples += 1;
         let Some(out) = self.out else { return };
@@ -130,8 +157,14 @@ impl Frames<'_> {
         }
         let ext = if self.stem == "surface" { "vts" } else { "vtu" };
         let name = format!("{}_{:06}.{ext}", self.stem, self.written.len());
-        match write(&out.join(&name)) {
-            Ok(()) => self.written.push((t, name)),
+        let net = format!("control_net_{:06}.vtu", self.written.len());
+        match write(&out.join(&name), &out.join(&net)) {
+            Ok(()) => {
+                self.written.push((t, name));
+                if self.control_net {
+                    self.control_net_written.push((t, net));
+                }
+            }
             Err(e) => self.error = Some(e),
         }
     }
@@ -181,10 +214,15 @@ pub fn simulate_dnurbs(
     let mut opts = RunOptions::new(dt, t_end, integrator);
     opts.cancel = request.cancel.clone();
     let steps = step_count(0.0, t_end, dt);
+    let save_every = scene.simulation.save_every.max(1);
+    let curve = matches!(model.geometry(), nurbspring_dnurbs::Geometry::Curve(_));
     let mut frames = Frames {
         out,
-        stem: "surface",
-        every: scene.output.vtk_every.max(1),
+        stem: if curve { "curve" } else { "surface" },
+        control_net: true,
+        control_net_written: Vec::new(),
+        every: scene.output.frame_every(samples(steps, save_every)),
+        capped: scene.output.vtk_every.is_none(),
         samples: 0,
         written: Vec::new(),
         error: None,
@@ -197,13 +235,13 @@ pub fn simulate_dnurbs(
         },
         initial,
         &opts,
-        Recording {
-            every: scene.simulation.save_every.max(1),
-        },
+        Recording { every: save_every },
         &mut |s, p| {
             progress(s.step, steps);
-            frames.sample(s.t, |path| {
-                write_geometry_frame(path, model.geometry(), p, dpp)
+            frames.sample(s.t, |path, net| {
+                let v = model.full_velocity(s.v);
+                write_geometry_frame_with(path, model.geometry(), p, Some(&v), dpp)?;
+                Ok(control_net_grid(model.geometry(), p, &v, model.p0(), dpp).write(net)?)
             });
         },
     );
@@ -229,7 +267,16 @@ pub fn simulate_msm(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Simulated, Result<RunSummary, Error>), Error> {
     let (dt, t_end) = resolve_time(&setup.path, setup.run.dt, setup.run.t_end, request)?;
-    let integrator = request.integrator.unwrap_or(setup.run.integrator);
+    let mut integrator = request.integrator.unwrap_or(setup.run.integrator);
+    let stability = setup
+        .model
+        .stability()
+        .map_err(|e| Error::model(&setup.path, None, e))?;
+    let mut warnings = Vec::new();
+    if let Some(w) = explicit_fallback(integrator, dt, stability.dt_critical, request) {
+        warnings.push(w);
+        integrator = IMPLICIT_FALLBACK;
+    }
     if let Some(reason) = MsmModel::integrator_problem(integrator) {
         return Err(integrator_error(
             &setup.path,
@@ -246,7 +293,12 @@ pub fn simulate_msm(
     let mut frames = Frames {
         out,
         stem: "lattice",
-        every: setup.vtk_every,
+        control_net: false,
+        control_net_written: Vec::new(),
+        every: setup
+            .vtk_every
+            .unwrap_or_else(|| default_frame_every(samples(steps, setup.save_every))),
+        capped: setup.vtk_every.is_none(),
         samples: 0,
         written: Vec::new(),
         error: None,
@@ -264,7 +316,7 @@ pub fn simulate_msm(
         },
         &mut |s, x| {
             progress(s.step, steps);
-            frames.sample(s.t, |path| write_lattice_frame(path, lattice, x));
+            frames.sample(s.t, |path, _| write_lattice_frame(path, lattice, x));
         },
     );
     let key = if request.dt.is_some() {
@@ -272,7 +324,7 @@ pub fn simulate_msm(
     } else {
         "simulation.dt"
     };
-    finish(
+    let (mut simulated, outcome) = finish(
         setup.path.clone(),
         key,
         integrator,
@@ -281,7 +333,39 @@ pub fn simulate_msm(
         trajectory,
         frames,
         result,
-    )
+    )?;
+    simulated.stability = Some(stability);
+    simulated.warnings = warnings;
+    Ok((simulated, outcome))
+}
+
+/// The implicit integrator an MSM run falls back to when the file's explicit one is above its
+/// stability limit: Newmark's average acceleration, unconditionally stable and without
+/// numerical damping.
+pub const IMPLICIT_FALLBACK: IntegratorKind = IntegratorKind::Newmark;
+
+/// The warning of a run whose default (not requested) explicit integrator is unstable at `dt`
+/// (`dt ≥ dt_critical`, the rule of [`nurbspring_sim::simulate`]): the run then uses
+/// [`IMPLICIT_FALLBACK`]. `None` when the integrator was asked for with `--integrator`, when
+/// `--force-unstable` was given, for implicit integrators, and below the limit.
+pub fn explicit_fallback(
+    integrator: IntegratorKind,
+    dt: f64,
+    dt_critical: f64,
+    request: &RunRequest,
+) -> Option<String> {
+    if request.integrator.is_some()
+        || request.force_unstable
+        || !integrator.is_explicit()
+        || dt < dt_critical
+    {
+        return None;
+    }
+    Some(format!(
+        "{integrator} is unstable at dt = {dt} s (dt_critical = {dt_critical:.4e} s); running \
+         {IMPLICIT_FALLBACK} instead (--integrator {integrator} --force-unstable runs it anyway, \
+         --integrator chooses another)"
+    ))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -306,15 +390,26 @@ fn finish(
             t_end,
             summary: outcome.as_ref().ok().cloned(),
             trajectory,
+            vtk_every: frames.every,
+            frames_capped: frames.capped && frames.every > 1,
+            pvd: format!("{}.pvd", frames.stem),
             frames: frames.written,
+            control_net_frames: frames.control_net_written,
             warnings: Vec::new(),
+            stability: None,
         },
         outcome,
     ))
 }
 
-/// Writes `trajectory.csv`, `energy.csv` and the `.pvd` series (`pvd` is its file name).
-pub fn write_run(out: &Path, run: &Simulated, pvd: &str) -> Result<(), Error> {
+/// The columns of `energy.csv`: time, kinetic energy, elastic energy (the springs' or the
+/// surface's, without the load), the load's potential (`external`, zero at the initial state of
+/// an MSM) and their sum.
+pub const ENERGY_COLUMNS: [&str; 5] = ["t", "kinetic", "elastic", "external", "total"];
+
+/// Writes `trajectory.csv`, `energy.csv`, the `.pvd` series ([`Simulated::pvd`]) and, for a
+/// D-NURBS, `control_net.pvd`.
+pub fn write_run(out: &Path, run: &Simulated) -> Result<(), Error> {
     let traj = &run.trajectory;
     let mut header = vec!["t".to_string()];
     for p in 0..traj.probes.len() {
@@ -333,17 +428,25 @@ pub fn write_run(out: &Path, run: &Simulated, pvd: &str) -> Result<(), Error> {
     write_csv(out.join("trajectory.csv"), &header, rows)?;
     write_csv(
         out.join("energy.csv"),
-        &["t", "kinetic", "elastic", "total"],
+        &ENERGY_COLUMNS,
         traj.t
             .iter()
             .zip(&traj.energy)
-            .map(|(t, e)| vec![*t, e[0], e[1], e[0] + e[1]]),
+            // `+ 0.0` writes an unloaded model's `−0` load potential as 0.
+            .map(|(t, e)| vec![*t, e[0], e[1], e[2] + 0.0, e[0] + e[1] + e[2]]),
     )?;
     let mut series = PvdSeries::default();
     for (t, f) in &run.frames {
         series.push(*t, f.as_str());
     }
-    series.write(out.join(pvd))?;
+    series.write(out.join(&run.pvd))?;
+    if !run.control_net_frames.is_empty() {
+        let mut net = PvdSeries::default();
+        for (t, f) in &run.control_net_frames {
+            net.push(*t, f.as_str());
+        }
+        net.write(out.join("control_net.pvd"))?;
+    }
     Ok(())
 }
 

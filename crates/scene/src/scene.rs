@@ -61,12 +61,28 @@ struct OutScene<'a> {
     output: &'a OutputSpec,
 }
 
+/// Why a `.json` file is refused where a scene is expected.
+pub const NOT_A_SCENE: &str = "a JSON file, not a scene (scenes are TOML): an msm.json written by \
+     `derive` runs with `simulate FILE --model msm`, `stability FILE` and `export FILE --format \
+     sofa|npz`; other commands need the scene (.toml) it was derived from, and `import FILE --out \
+     SCENE.toml` turns a geomdl JSON file into a scene";
+
 impl Scene {
     /// Reads and validates a scene file: a regular file of at most [`MAX_FILE_BYTES`], read
     /// through its handle (a FIFO, a device or a folder is refused, and nothing is read past
     /// the limit).
     pub fn from_path(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
+        if crate::msm_file::is_msm_file(path) {
+            // msm.json (or another JSON file): say what it is rather than fail in the TOML parser.
+            return Err(SceneError::Parse {
+                path: path.to_path_buf(),
+                message: NOT_A_SCENE.to_string(),
+                line: 0,
+                column: 0,
+                suggestion: None,
+            });
+        }
         let text = read_text(path, MAX_FILE_BYTES, "scene")?;
         Scene::from_str(&text, path)
     }

@@ -491,17 +491,31 @@ pub enum MassMethod {
 }
 
 /// `[output]`: what is written during runs.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OutputSpec {
-    /// Write a VTK frame every n saved frames (≥ 1).
-    pub vtk_every: usize,
+    /// Write a VTK frame every n saved frames (≥ 1); unset: at most [`DEFAULT_MAX_FRAMES`]
+    /// frames ([`OutputSpec::frame_every`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vtk_every: Option<usize>,
 }
 
-impl Default for OutputSpec {
-    fn default() -> Self {
-        Self { vtk_every: 1 }
+/// Most ParaView frames a run writes when `output.vtk_every` is not set: enough to play the
+/// motion in a viewer, about 7 MB for the paper's lattice.
+pub const DEFAULT_MAX_FRAMES: usize = 200;
+
+impl OutputSpec {
+    /// A ParaView frame every n of a run's `samples` recorded samples: `vtk_every` when set,
+    /// otherwise the smallest n that writes at most [`DEFAULT_MAX_FRAMES`] frames.
+    pub fn frame_every(&self, samples: usize) -> usize {
+        self.vtk_every
+            .unwrap_or_else(|| default_frame_every(samples))
     }
+}
+
+/// The smallest n ≥ 1 with `⌈samples / n⌉ ≤ DEFAULT_MAX_FRAMES`.
+pub fn default_frame_every(samples: usize) -> usize {
+    samples.div_ceil(DEFAULT_MAX_FRAMES).max(1)
 }
 
 /// Largest number of control points, lattice nodes or array entries a scene may ask for
@@ -716,4 +730,33 @@ pub(crate) struct RawInitial {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) velocities: Option<toml::Value>,
     pub(crate) displacement: [f64; 3],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Without `vtk_every` the frame count ⌈samples / n⌉ is at most 200, with the smallest n.
+    #[test]
+    fn default_frame_every_keeps_at_most_200_frames() {
+        for (samples, every, frames) in [
+            (0, 1, 0),
+            (1, 1, 1),
+            (200, 1, 200),
+            (201, 2, 101),
+            (2001, 11, 182),
+            (40_001, 201, 200),
+        ] {
+            let n = default_frame_every(samples);
+            assert_eq!(n, every, "{samples}");
+            assert_eq!(samples.div_ceil(n), frames, "{samples}");
+            assert!(
+                n == 1 || samples.div_ceil(n - 1) > DEFAULT_MAX_FRAMES,
+                "{samples}"
+            );
+        }
+        let set = OutputSpec { vtk_every: Some(3) };
+        assert_eq!(set.frame_every(2001), 3);
+        assert_eq!(OutputSpec::default().frame_every(2001), 11);
+    }
 }

@@ -104,8 +104,9 @@ pub struct Summary {
     /// The MSM (surfaces only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub msm: Option<MsmSummary>,
-    /// Warnings (e.g. a quadrature rule with a large estimated error).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    /// Warnings: a quadrature rule with a large estimated error, zero stiffness, unconstrained
+    /// rigid motion, a time step above the explicit limit of the MSM integrator
+    /// ([`scene_warnings`]).
     pub warnings: Vec<String>,
 }
 
@@ -181,9 +182,62 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
             dnurbs_integrator: time.dnurbs_integrator,
             msm_integrator: time.msm_integrator,
         },
+        warnings: model
+            .quadrature()
+            .warning()
+            .into_iter()
+            .chain(scene_warnings(scene, &model, msm.as_ref()))
+            .collect(),
         msm,
-        warnings: model.quadrature().warning().into_iter().collect(),
     })
+}
+
+/// What `check` warns about a valid scene: a material without stiffness, a body free to move
+/// rigidly, and a time step above the explicit limit of the scene's MSM integrator.
+pub fn scene_warnings(scene: &Scene, model: &DnurbsModel, msm: Option<&MsmSummary>) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let m = &scene.material;
+    let names: &[(&str, f64)] = match model.geometry() {
+        Geometry::Surface(_) => &[
+            ("alpha11", m.alpha11),
+            ("alpha22", m.alpha22),
+            ("beta11", m.beta11),
+            ("beta12", m.beta12),
+            ("beta22", m.beta22),
+        ],
+        Geometry::Curve(_) => &[("alpha11", m.alpha11), ("beta11", m.beta11)],
+    };
+    if names.iter().all(|(_, k)| *k == 0.0) {
+        let list: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+        warnings.push(format!(
+            "material: zero stiffness ({} all 0): K = 0, nothing resists deformation and every \
+             derived spring constant is 0",
+            list.join(", ")
+        ));
+    }
+    if model.fixed_points().is_empty() && scene.constraints.linear.is_empty() {
+        warnings.push(
+            "constraints: no fixed control points and no linear constraints: the body is free \
+             to translate and rotate (K is singular; `steady` refuses it)"
+                .to_string(),
+        );
+    }
+    let time = scene.time_settings();
+    if let Some(msm) = msm
+        && time.msm_integrator.is_explicit()
+        && time.dt >= msm.dt_critical
+    {
+        warnings.push(format!(
+            "simulation.dt = {} is above the explicit limit of simulation.msm_integrator = {} \
+             (dt_critical = {:.4e} s): `simulate --model msm` runs {} instead; choose dt below \
+             dt_critical or an implicit integrator",
+            time.dt,
+            time.msm_integrator,
+            msm.dt_critical,
+            crate::run::IMPLICIT_FALLBACK
+        ));
+    }
+    warnings
 }
 
 /// `weight of control point [i, j] (dof d) held at w = …` for the gauge weight, if any.

@@ -163,7 +163,7 @@ pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneErro
     );
     let method = raw.fit.derivation_for(&raw.dnurbs, &raw.constraints).0;
     check_msm(&raw.msm, &raw.loads, method, info.as_ref(), &mut p);
-    if raw.output.vtk_every == 0 {
+    if raw.output.vtk_every == Some(0) {
         p.push("output.vtk_every", "0", "must be at least 1");
     }
     match (geometry, p.len()) {

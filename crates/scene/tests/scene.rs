@@ -143,7 +143,7 @@ fn defaults_apply_to_missing_sections() {
     assert_eq!(scene.msm, MsmSpec::default());
     assert_eq!(scene.fit.method, FitMethod::ClosedForm);
     assert_eq!(scene.fit.mass, MassMethod::EigenvalueScan);
-    assert_eq!(scene.output.vtk_every, 1);
+    assert_eq!(scene.output.vtk_every, None); // at most DEFAULT_MAX_FRAMES frames
     let curve = scene.to_curve().unwrap();
     assert_eq!(curve.point(0.5).unwrap(), [0.5, 0.0, 0.0]);
 }
@@ -1032,7 +1032,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     max_candidates: fit,
                 },
                 output: OutputSpec {
-                    vtk_every: save_every,
+                    vtk_every: Some(save_every),
                 },
             }
         })

@@ -167,9 +167,12 @@ pub struct Sample<'a> {
     pub v: &'a [f64],
     /// Kinetic energy `½ vᵀ M v`.
     pub kinetic: f64,
-    /// Potential energy: the model's elastic energy plus its external potential
-    /// ([`DynamicModel::external_potential`]), so `kinetic + potential` is the total energy.
+    /// Potential energy: `elastic + external`, so `kinetic + potential` is the total energy.
     pub potential: f64,
+    /// The model's elastic energy ([`DynamicModel::potential_energy`]).
+    pub elastic: f64,
+    /// The potential of the load ([`DynamicModel::external_potential`]).
+    pub external: f64,
 }
 
 /// Receives samples during [`simulate`].
@@ -281,10 +284,14 @@ pub fn step_count(t0: f64, t_end: f64, dt: f64) -> usize {
     }
 }
 
-fn sample_energy(model: &dyn DynamicModel, t: f64, q: &[f64], v: &[f64]) -> (f64, f64) {
+/// `(kinetic, elastic, external)` energies of a state.
+fn sample_energy(model: &dyn DynamicModel, t: f64, q: &[f64], v: &[f64]) -> (f64, f64, f64) {
     let kinetic = 0.5 * model.mass().quadratic_form(v);
-    let potential = model.potential_energy(q) + model.external_potential(t, q);
-    (kinetic, potential)
+    (
+        kinetic,
+        model.potential_energy(q),
+        model.external_potential(t, q),
+    )
 }
 
 fn check_state(q: &[f64], v: &[f64], q0: &[f64], limit: f64) -> Option<String> {
@@ -346,14 +353,16 @@ pub fn simulate(
     let mut state = initial;
     debug_assert_eq!(state.q.len(), n);
 
-    let (kinetic, potential) = sample_energy(model, state.t, &state.q, &state.v);
+    let (kinetic, elastic, external) = sample_energy(model, state.t, &state.q, &state.v);
     observer.observe(&Sample {
         step: 0,
         t: state.t,
         q: &state.q,
         v: &state.v,
         kinetic,
-        potential,
+        potential: elastic + external,
+        elastic,
+        external,
     });
     let mut summary = RunSummary {
         steps: 0,
@@ -380,14 +389,16 @@ pub fn simulate(
                 reason,
             });
         }
-        let (kinetic, potential) = sample_energy(model, state.t, &state.q, &state.v);
+        let (kinetic, elastic, external) = sample_energy(model, state.t, &state.q, &state.v);
         observer.observe(&Sample {
             step: k,
             t: state.t,
             q: &state.q,
             v: &state.v,
             kinetic,
-            potential,
+            potential: elastic + external,
+            elastic,
+            external,
         });
         summary.steps = k;
         summary.t_final = state.t;

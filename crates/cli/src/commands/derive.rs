@@ -10,7 +10,7 @@ use nurbspring_scene::{Error, Scene};
 use crate::progress::Progress;
 use nurbspring_scene::resources::Job;
 
-use crate::{CmdResult, Context, commit_out_dir, stage_out_dir};
+use crate::{CmdResult, Context, commit_out_dir, print_report, stage_out_dir};
 
 /// Flags of `nurbspring derive`.
 #[derive(Args, Debug)]
@@ -24,6 +24,9 @@ pub struct DeriveArgs {
     /// fit.derivation).
     #[arg(long, value_parser = parse_method)]
     derivation: Option<Method>,
+    /// Print report.json on stdout instead of the result lines.
+    #[arg(long)]
+    json: bool,
 }
 
 fn parse_method(s: &str) -> Result<Method, String> {
@@ -68,7 +71,9 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     let label = args.scene.display().to_string();
     write_derivation(staged.path(), &label, &scene, &derivation, None, "")?;
     let out = commit_out_dir(staged)?;
-    if ctx.verbose() {
+    if args.json {
+        print_report(&out)?;
+    } else {
         let d = &derivation.derived;
         println!(
             "derived MSM ({}): {}, m = {:.6}; dt_critical = {:.5}; central node rel. RMS = {} over {:.3} s ({}), second excitation {:.4}",
@@ -87,7 +92,7 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
         );
         println!("Outputs in {}", out.display());
     }
-    if let Some(why) = fallback {
+    if let (Some(why), true) = (fallback, ctx.verbose()) {
         eprintln!("note: {why}");
     }
     for w in &derivation.warnings {

@@ -50,7 +50,7 @@ pub struct ExportArgs {
 }
 
 /// Writes the export.
-pub fn run(ctx: &Context, args: ExportArgs) -> CmdResult {
+pub fn run(_ctx: &Context, args: ExportArgs) -> CmdResult {
     if args.tessellate.is_some() && args.format != ExportFormat::Obj {
         return Err(Error::option(
             "--tessellate",
@@ -126,8 +126,7 @@ pub fn run(ctx: &Context, args: ExportArgs) -> CmdResult {
             }
         }
     };
-    if ctx.verbose() {
-        println!("{what} written to {}", args.out.display());
-    }
+    // The result line: kept under -q (only progress and notes are hidden).
+    println!("{what} written to {}", args.out.display());
     Ok(())
 }

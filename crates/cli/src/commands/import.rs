@@ -54,8 +54,10 @@ pub fn run(ctx: &Context, args: ImportArgs) -> CmdResult {
     // The scene must load as written (with its path, so that a linked file resolves).
     let scene = Scene::from_str(&text, &args.out)?;
     write_text_file(&args.out, &text)?;
-    for note in &file.notes {
-        eprintln!("note: {note}");
+    if ctx.verbose() {
+        for note in &file.notes {
+            eprintln!("note: {note}");
+        }
     }
     let (n_u, n_v) = scene.geometry.net_dims();
     let others = file.shapes.len() - 1;
@@ -67,19 +69,18 @@ pub fn run(ctx: &Context, args: ImportArgs) -> CmdResult {
             args.index
         );
     }
-    if ctx.verbose() {
-        let size = if scene.geometry.is_surface() {
-            format!("{n_u} x {n_v}")
-        } else {
-            n_u.to_string()
-        };
-        println!(
-            "imported {} ({size} control points) from {}; scene written to {}",
-            scene.geometry.section(),
-            args.file.display(),
-            args.out.display()
-        );
-    }
+    // The result line: kept under -q (only progress and notes are hidden).
+    let size = if scene.geometry.is_surface() {
+        format!("{n_u} x {n_v}")
+    } else {
+        n_u.to_string()
+    };
+    println!(
+        "imported {} ({size} control points) from {}; scene written to {}",
+        scene.geometry.section(),
+        args.file.display(),
+        args.out.display()
+    );
     Ok(())
 }
 

@@ -8,7 +8,7 @@ use nurbspring_scene::export::write_matrices;
 
 use nurbspring_scene::resources::Job;
 
-use crate::{CmdResult, Context, commit_out_dir, stage_out_dir};
+use crate::{CmdResult, Context, commit_out_dir, print_json, stage_out_dir};
 
 /// Flags of `nurbspring matrices`.
 #[derive(Args, Debug)]
@@ -18,6 +18,9 @@ pub struct MatricesArgs {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
+    /// Print what was written as JSON on stdout instead of the result line.
+    #[arg(long)]
+    json: bool,
 }
 
 /// Assembles and writes M, D, K, f and the dof ordering.
@@ -26,17 +29,23 @@ pub fn run(ctx: &Context, args: MatricesArgs) -> CmdResult {
     ctx.check_resources(&scene, Job::Assemble, Some(&args.out))?;
     let model = scene.build_dnurbs()?;
     let staged = stage_out_dir(&args.out)?;
-    write_matrices(staged.path(), &model, &args.scene.display().to_string())?;
+    let written = write_matrices(staged.path(), &model, &args.scene.display().to_string())?;
     let out = commit_out_dir(staged)?;
-    if ctx.verbose() {
-        let k = &model.matrices().stiffness;
-        println!(
-            "wrote M, D, K ({} × {}, {} non-zeros in K), f and dofs.json to {}",
-            k.nrows(),
-            k.ncols(),
-            k.nnz(),
-            out.display()
-        );
+    if args.json {
+        let mut v = serde_json::to_value(&written).unwrap_or_default();
+        if let serde_json::Value::Object(map) = &mut v {
+            map.insert("out".into(), out.display().to_string().into());
+        }
+        return print_json(&v);
     }
+    let e = &written.stored_entries;
+    println!(
+        "wrote M, D, K ({n} × {n}, symmetric; {} / {} / {} stored entries), f and dofs.json to {}",
+        e["M"],
+        e["D"],
+        e["K"],
+        out.display(),
+        n = written.dofs,
+    );
     Ok(())
 }

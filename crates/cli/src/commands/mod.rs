@@ -13,7 +13,7 @@ pub mod simulate;
 pub mod stability;
 pub mod steady;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 use nurbspring_msm::{Class, Constants, SpringKind};
 use nurbspring_scene::MsmOverrides;
 use nurbspring_sim::IntegratorKind;
@@ -59,12 +59,60 @@ pub fn flag(field: &str) -> String {
     format!("--{}", field.replace('_', "-"))
 }
 
-/// Parses `--integrator`: any integrator by name (which ones apply is the model's rule).
-pub fn parse_integrator(s: &str) -> Result<IntegratorKind, String> {
-    IntegratorKind::parse(s).ok_or_else(|| {
-        format!(
-            "unknown integrator; expected one of {}",
-            nurbspring_dnurbs::integrator_names(&IntegratorKind::ALL)
-        )
-    })
+/// The values of `--integrator`: every integrator by its scene name (which ones apply is the
+/// model's rule, checked when the run starts).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorChoice {
+    /// Terzopoulos–Qin backward differences (D-NURBS); unconditionally stable.
+    TerzopoulosQin,
+    /// Newmark average acceleration; unconditionally stable, no numerical damping.
+    Newmark,
+    /// Backward Euler with Newton iterations (MSM); unconditionally stable, dissipative.
+    BackwardEuler,
+    /// Symplectic Euler (MSM); explicit: stable below dt_critical.
+    SymplecticEuler,
+    /// Velocity Verlet (MSM); explicit: stable below dt_critical.
+    #[value(alias = "velocity-verlet")]
+    Verlet,
+    /// Classical Runge–Kutta (MSM); explicit: stable below dt_critical.
+    Rk4,
+    /// Exact modal solution of the undamped linear system (linear models).
+    Modal,
+}
+
+impl From<IntegratorChoice> for IntegratorKind {
+    fn from(c: IntegratorChoice) -> Self {
+        match c {
+            IntegratorChoice::TerzopoulosQin => IntegratorKind::TerzopoulosQin,
+            IntegratorChoice::Newmark => IntegratorKind::Newmark,
+            IntegratorChoice::BackwardEuler => IntegratorKind::BackwardEuler,
+            IntegratorChoice::SymplecticEuler => IntegratorKind::SymplecticEuler,
+            IntegratorChoice::Verlet => IntegratorKind::VelocityVerlet,
+            IntegratorChoice::Rk4 => IntegratorKind::Rk4,
+            IntegratorChoice::Modal => IntegratorKind::Modal,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every integrator has exactly one choice, under its scene name.
+    #[test]
+    fn integrator_choices_are_the_scene_names() {
+        let choices = IntegratorChoice::value_variants();
+        assert_eq!(choices.len(), IntegratorKind::ALL.len());
+        for kind in IntegratorKind::ALL {
+            let found: Vec<_> = choices
+                .iter()
+                .filter(|c| IntegratorKind::from(**c) == kind)
+                .collect();
+            assert_eq!(found.len(), 1, "{kind}");
+            let value = found[0].to_possible_value().unwrap();
+            assert_eq!(value.get_name(), kind.name());
+        }
+        let verlet = IntegratorChoice::from_str("velocity-verlet", false).unwrap();
+        assert_eq!(IntegratorKind::from(verlet), IntegratorKind::VelocityVerlet);
+    }
 }

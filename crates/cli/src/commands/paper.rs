@@ -8,7 +8,7 @@ use nurbspring_scene::markdown::verdict_table;
 use nurbspring_scene::report::write_derivation;
 
 use crate::progress::Progress;
-use crate::{CmdResult, Context, commit_out_dir, stage_out_dir};
+use crate::{CmdResult, Context, commit_out_dir, print_report, stage_out_dir};
 
 /// Flags of `nurbspring paper`.
 #[derive(Args, Debug)]
@@ -16,6 +16,9 @@ pub struct PaperArgs {
     /// Output folder.
     #[arg(long, default_value = "paper-output")]
     out: PathBuf,
+    /// Print report.json on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs the paper's experiment and prints the reproduction table.
@@ -38,6 +41,9 @@ pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
         &table,
     )?;
     let out = commit_out_dir(staged)?;
+    if args.json {
+        return print_report(&out);
+    }
     println!("{table}");
     println!("Outputs in {}", out.display());
     Ok(())

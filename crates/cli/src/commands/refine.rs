@@ -74,7 +74,7 @@ fn describe(g: &GeometrySpec) -> String {
 }
 
 /// Refines the scene's geometry exactly and writes the scene with the finer net.
-pub fn run(ctx: &Context, args: RefineArgs) -> CmdResult {
+pub fn run(_ctx: &Context, args: RefineArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
     let refinement = Refinement {
         insert_u: args.insert_u.clone(),
@@ -113,14 +113,13 @@ pub fn run(ctx: &Context, args: RefineArgs) -> CmdResult {
         refined.to_toml()
     );
     write_text_file(&args.out, &text)?;
-    if ctx.verbose() {
-        println!(
-            "refined {}: {} -> {}; written to {}",
-            scene.geometry.section(),
-            describe(&scene.geometry),
-            describe(&refined.geometry),
-            args.out.display()
-        );
-    }
+    // The result line: kept under -q (only progress and notes are hidden).
+    println!(
+        "refined {}: {} -> {}; written to {}",
+        scene.geometry.section(),
+        describe(&scene.geometry),
+        describe(&refined.geometry),
+        args.out.display()
+    );
     Ok(())
 }

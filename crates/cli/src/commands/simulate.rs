@@ -1,18 +1,19 @@
 //! `nurbspring simulate SCENE --model dnurbs|msm --out DIR`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 
 use clap::{Args, ValueEnum};
-use nurbspring_scene::run::{RunRequest, simulate_dnurbs, simulate_msm, write_run};
-use nurbspring_scene::{Error, Scene};
-use nurbspring_sim::IntegratorKind;
+use nurbspring_scene::run::{RunRequest, Simulated, simulate_dnurbs, simulate_msm, write_run};
+use nurbspring_scene::{DEFAULT_MAX_FRAMES, Error, Scene};
+use nurbspring_sim::{IntegratorKind, RunSummary};
+use serde_json::json;
 
-use crate::commands::{MsmFlags, flag, parse_integrator};
+use crate::commands::{IntegratorChoice, MsmFlags, flag};
 use crate::progress::Progress;
 use nurbspring_scene::resources::{Job, Timing};
 
-use crate::{CmdResult, Context, commit_out_dir, stage_out_dir};
+use crate::{CmdResult, Context, commit_out_dir, print_json, stage_out_dir};
 
 /// Which model to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -40,23 +41,28 @@ pub struct SimulateArgs {
     /// End time [s] (default: the scene's).
     #[arg(long)]
     t_end: Option<f64>,
-    /// Integrator: terzopoulos-qin, newmark, modal (D-NURBS); symplectic-euler, verlet, rk4,
-    /// backward-euler, newmark, modal (MSM; modal: linear MSMs). Default: the scene's.
-    #[arg(long, value_parser = parse_integrator)]
-    integrator: Option<IntegratorKind>,
+    /// Integrator (default: the scene's). D-NURBS: terzopoulos-qin, newmark, modal; MSM:
+    /// symplectic-euler, verlet, rk4, backward-euler, newmark, modal (linear MSMs). A scene's
+    /// explicit MSM integrator above its stability limit is replaced by newmark, with a warning.
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorChoice>,
     /// Run an explicit integrator above its stability limit anyway.
     #[arg(long)]
     force_unstable: bool,
+    /// Print the run's summary as JSON on stdout instead of the result line.
+    #[arg(long)]
+    json: bool,
     #[command(flatten)]
     overrides: MsmFlags,
 }
 
 /// Runs the simulation and writes trajectory.csv, energy.csv and a ParaView series.
 pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
+    let integrator = args.integrator.map(IntegratorKind::from);
     let request = RunRequest {
         dt: args.dt,
         t_end: args.t_end,
-        integrator: args.integrator,
+        integrator,
         force_unstable: args.force_unstable,
         cancel: Some(ctx.cancel.clone()),
     };
@@ -66,14 +72,14 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
     };
     let bar = Progress::new(ctx.global.quiet, "", 1);
     let mut progress = |step: usize, steps: usize| bar.update(step, steps);
-    let (staged, simulated, outcome, pvd, what) = match args.model {
+    let (staged, simulated, outcome, what) = match args.model {
         ModelKind::Dnurbs => {
             let scene = Scene::from_path(&args.scene)?;
             ctx.check_resources(&scene, Job::SimulateDnurbs(timing), Some(&args.out))?;
             let staged = stage_out_dir(&args.out)?;
             let (sim, outcome) =
                 simulate_dnurbs(&scene, &request, Some(staged.path()), &mut progress)?;
-            (staged, sim, outcome, "surface.pvd", "D-NURBS")
+            (staged, sim, outcome, ModelKind::Dnurbs)
         }
         ModelKind::Msm => {
             let setup = ctx.load_msm(
@@ -82,51 +88,95 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
                 &flag,
                 Some((&args.out, timing)),
             )?;
-            let s = setup
-                .model
-                .stability()
-                .map_err(|e| Error::model(&setup.path, None, e))?;
-            let dt = args.dt.unwrap_or(setup.run.dt);
-            let integrator = args.integrator.unwrap_or(setup.run.integrator);
-            println!(
-                "stability: omega_max = {:.6e} rad/s, dt_critical = {:.6e} s (dt = {dt}{})",
-                s.omega_max,
-                s.dt_critical,
-                if integrator.is_explicit() && dt >= s.dt_critical {
-                    ", above the explicit limit"
-                } else {
-                    ""
-                }
-            );
             let staged = stage_out_dir(&args.out)?;
             let (sim, outcome) =
                 simulate_msm(&setup, &request, Some(staged.path()), &mut progress)?;
-            (staged, sim, outcome, "lattice.pvd", "MSM")
+            (staged, sim, outcome, ModelKind::Msm)
         }
     };
     bar.finish();
     for w in &simulated.warnings {
         eprintln!("warning: {w}");
     }
-    // A failed run leaves the previous one in place (the staged folder is dropped).
-    outcome?;
-    write_run(staged.path(), &simulated, pvd)?;
-    if ctx.cancel.load(Ordering::Relaxed) {
-        let kept = staged.keep_interrupted().map_err(Error::Output)?;
+    if let (Some(s), true) = (simulated.stability, ctx.verbose()) {
         eprintln!(
-            "interrupted: {} is as it was; the samples computed so far are in {}",
-            args.out.display(),
-            kept.display()
+            "stability: omega_max = {:.6e} rad/s, dt_critical = {:.6e} s (dt = {}, {})",
+            s.omega_max, s.dt_critical, simulated.dt, simulated.integrator
         );
-        return Err(Error::Cancelled);
+    }
+    // A failed run leaves the previous one in place (the staged folder is dropped).
+    let summary = outcome?;
+    write_run(staged.path(), &simulated)?;
+    if summary.cancelled || ctx.cancel.load(Ordering::Relaxed) {
+        let kept = staged.keep_interrupted().map_err(Error::Output)?;
+        return Err(Error::CancelledKept {
+            out: args.out.clone(),
+            kept,
+        });
     }
     let out = commit_out_dir(staged)?;
-    if ctx.verbose() {
-        println!(
-            "{what} run ({}) written to {}",
-            simulated.integrator,
-            out.display()
+    if ctx.verbose() && simulated.frames_capped {
+        eprintln!(
+            "note: a ParaView frame every {} samples (at most {DEFAULT_MAX_FRAMES} by default); \
+             set output.vtk_every = 1 in the scene for every sample",
+            simulated.vtk_every
         );
     }
+    if args.json {
+        return print_json(&run_summary(what, &simulated, &summary, &out));
+    }
+    println!(
+        "{} run ({}, {} steps, {} samples, {} ParaView frames) written to {}",
+        what.label(),
+        simulated.integrator,
+        summary.steps,
+        simulated.trajectory.t.len(),
+        simulated.frames.len(),
+        out.display()
+    );
     Ok(())
+}
+
+impl ModelKind {
+    fn label(self) -> &'static str {
+        match self {
+            ModelKind::Dnurbs => "D-NURBS",
+            ModelKind::Msm => "MSM",
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            ModelKind::Dnurbs => "dnurbs",
+            ModelKind::Msm => "msm",
+        }
+    }
+}
+
+/// What `simulate --json` prints: the settings the run used and what it wrote.
+pub fn run_summary(
+    model: ModelKind,
+    simulated: &Simulated,
+    summary: &RunSummary,
+    out: &Path,
+) -> serde_json::Value {
+    let mut v = json!({
+        "model": model.name(),
+        "integrator": simulated.integrator.name(),
+        "dt": simulated.dt,
+        "t_end": simulated.t_end,
+        "steps": summary.steps,
+        "t_final": summary.t_final,
+        "samples": simulated.trajectory.t.len(),
+        "frames": simulated.frames.len(),
+        "pvd": simulated.pvd,
+        "vtk_every": simulated.vtk_every,
+        "warnings": simulated.warnings,
+        "out": out.display().to_string(),
+    });
+    if let (Some(s), serde_json::Value::Object(map)) = (simulated.stability, &mut v) {
+        map.insert("omega_max".into(), json!(s.omega_max));
+        map.insert("dt_critical".into(), json!(s.dt_critical));
+    }
+    v
 }

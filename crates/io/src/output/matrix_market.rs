@@ -59,7 +59,8 @@ pub fn write_matrix_market(
 }
 
 /// Writes a symmetric matrix as `%%MatrixMarket matrix coordinate real symmetric`: only the
-/// entries with `row ≥ col` are stored. Refuses (writing nothing) a matrix that is not square
+/// non-zero entries with `row ≥ col` are stored (explicit zeros of the sparsity pattern are
+/// left out, so an all-zero matrix is a file with 0 entries). Refuses (writing nothing) a matrix that is not square
 /// or whose upper triangle differs from its lower one by more than `1e-12` times its largest
 /// entry, naming the worst entry.
 pub fn write_matrix_market_symmetric(
@@ -102,7 +103,10 @@ pub fn write_matrix_market_symmetric(
             ),
         ));
     }
-    let lower: Vec<(usize, usize, f64)> = a.triplets().filter(|&(i, j, _)| i >= j).collect();
+    let lower: Vec<(usize, usize, f64)> = a
+        .triplets()
+        .filter(|&(i, j, v)| i >= j && v != 0.0)
+        .collect();
     write_atomic(path, |w| {
         writeln!(w, "%%MatrixMarket matrix coordinate real symmetric")?;
         write_comment(w, comment)?;
@@ -505,6 +509,44 @@ mod tests {
         let text = std::fs::read_to_string(&p).unwrap();
         assert!(text.contains("\n4 4 5\n"), "{text}");
         assert_eq!(read_matrix_market(&p).unwrap(), a);
+    }
+
+    #[test]
+    fn symmetric_writer_leaves_out_explicit_zeros() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("z.mtx");
+        let a = SparseMatrix::from_triplets(
+            3,
+            3,
+            &[
+                (0, 0, 2.0),
+                (1, 0, 0.0),
+                (0, 1, 0.0),
+                (2, 1, -1.0),
+                (1, 2, -1.0),
+                (2, 2, 0.0),
+            ],
+        )
+        .unwrap();
+        write_matrix_market_symmetric(&p, &a, "").unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert_eq!(
+            text,
+            "%%MatrixMarket matrix coordinate real symmetric\n3 3 2\n1 1 2\n3 2 -1\n"
+        );
+        let back = read_matrix_market(&p).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                assert_eq!(back.get(i, j), a.get(i, j), "({i}, {j})");
+            }
+        }
+        // An all-zero pattern (D with γ = 0) is a file with no entries.
+        let zero = SparseMatrix::from_triplets(2, 2, &[(0, 0, 0.0), (1, 1, 0.0)]).unwrap();
+        write_matrix_market_symmetric(&p, &zero, "").unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&p).unwrap(),
+            "%%MatrixMarket matrix coordinate real symmetric\n2 2 0\n"
+        );
     }
 
     #[test]
