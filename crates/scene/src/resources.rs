@@ -63,6 +63,8 @@ pub struct Estimate {
     pub frames: u64,
     /// The scene key that sets the size of the largest term.
     pub size_key: &'static str,
+    /// The run asks for more than `MAX_STEPS` steps (refused by the time rule, not here).
+    pub too_many_steps: bool,
 }
 
 /// The limits a command runs under.
@@ -274,7 +276,9 @@ impl Scene {
         };
         let dt = timing.dt.unwrap_or(self.simulation.dt);
         let t_end = timing.t_end.unwrap_or(self.simulation.t_end);
+        // More than MAX_STEPS is refused by the time rule itself, naming the key or flag.
         let steps = (t_end / dt).ceil().clamp(1.0, nurbspring_sim::MAX_STEPS);
+        let too_many_steps = t_end / dt > nurbspring_sim::MAX_STEPS;
         let saves = (steps / self.simulation.save_every.max(1) as f64).ceil() + 1.0;
         let frames = (saves / self.output.frame_every(saves as usize) as f64).ceil();
         let probes = self.simulation.probes.len().max(1) as f64;
@@ -361,6 +365,7 @@ impl Scene {
             output: clamp(output),
             frames: clamp(frame_count),
             size_key,
+            too_many_steps,
         }
     }
 
@@ -390,6 +395,9 @@ impl Scene {
                     format_bytes(limits.memory)
                 ),
             });
+        }
+        if e.too_many_steps {
+            return Ok(e);
         }
         let free = out.and_then(free_space);
         let room = free.map_or(limits.output, |f| f.min(limits.output));
