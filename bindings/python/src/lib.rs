@@ -226,9 +226,11 @@ impl Scene {
     /// Parameter domain: `((u0, u1), (v0, v1))` of a surface, `((u0, u1), (0, 0))` of a curve.
     fn domain(&self) -> PyResult<((f64, f64), (f64, f64))> {
         match self.inner.geometry {
-            nurbspring_scene::GeometrySpec::Surface(_) => {
-                Ok(self.inner.to_surface().map_err(|e| py_err(e.into()))?.domain())
-            }
+            nurbspring_scene::GeometrySpec::Surface(_) => Ok(self
+                .inner
+                .to_surface()
+                .map_err(|e| py_err(e.into()))?
+                .domain()),
             nurbspring_scene::GeometrySpec::Curve(_) => {
                 let c = self.inner.to_curve().map_err(|e| py_err(e.into()))?;
                 Ok((c.domain(), (0.0, 0.0)))
@@ -269,7 +271,7 @@ impl Scene {
                     "uv" => x.uv,
                     _ => x.vv,
                 };
-                (name, f64_bytes(py, d.iter().flat_map(|x| pick(x))))
+                (name, f64_bytes(py, d.iter().flat_map(pick)))
             })
             .collect())
     }
@@ -302,7 +304,7 @@ impl Scene {
                     "u" => x.u,
                     _ => x.uu,
                 };
-                (name, f64_bytes(py, d.iter().flat_map(|x| pick(x))))
+                (name, f64_bytes(py, d.iter().flat_map(pick)))
             })
             .collect())
     }
@@ -466,8 +468,8 @@ impl MassSpring {
     /// msm.json text; `name` stands for the file in messages.
     #[staticmethod]
     fn from_json(text: &str, name: &str) -> PyResult<Self> {
-        let setup = msm_setup_from_text(text, Path::new(name), &MsmOverrides::default())
-            .map_err(py_err)?;
+        let setup =
+            msm_setup_from_text(text, Path::new(name), &MsmOverrides::default()).map_err(py_err)?;
         Ok(Self { setup })
     }
 
