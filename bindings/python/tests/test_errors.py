@@ -85,3 +85,18 @@ def test_ctrl_c_interrupts_a_long_simulation():
     assert time.monotonic() - start < 10, "the run did not stop promptly"
     assert p.returncode == 3, (out, err)
     assert "interrupted" in out
+
+
+def test_long_calls_release_the_gil():
+    import threading
+
+    scene = ns.Scene.load("examples/paper.toml")
+    worker = threading.Thread(target=ns.simulate, args=(scene,), kwargs={"t_end": 1.0e4})
+    worker.start()
+    ticks = 0
+    while worker.is_alive():
+        ticks += 1
+        time.sleep(0.005)
+    worker.join()
+    # Holding the GIL for the whole run would leave this thread a tick or two.
+    assert ticks >= 10
