@@ -3,6 +3,9 @@
 //! line. Readings are enums, thresholds are named constants, and every sentence of a verdict
 //! is built from the numbers measured here.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use nurbspring_dnurbs::{Geometry, RestShape};
 use nurbspring_geom::NurbsSurface;
 use nurbspring_msm::{Class, Constants, SpringKind};
@@ -513,9 +516,26 @@ pub fn reproduce(
     base: &Config,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Derivation, PaperReport), DeriveError> {
-    let (main, main_setup) = derive_msm(base, None, progress)?;
+    reproduce_cancellable(base, None, progress)
+}
+
+/// [`reproduce`] that stops with [`DeriveError::Cancelled`] soon after `cancel` is set: the
+/// main derivation checks it at every step, the readings between them.
+pub fn reproduce_cancellable(
+    base: &Config,
+    cancel: Option<Arc<AtomicBool>>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Derivation, PaperReport), DeriveError> {
+    let cancelled = || -> Result<(), DeriveError> {
+        match &cancel {
+            Some(c) if c.load(Ordering::Relaxed) => Err(DeriveError::Cancelled),
+            _ => Ok(()),
+        }
+    };
+    let (main, main_setup) = derive_msm(base, cancel.clone(), progress)?;
     let mut fits = Vec::new();
     for net in ControlNet::ALL {
+        cancelled()?;
         fits.extend(fit_readings(&Setup::new(&with_net(base, net)?)?, net)?);
     }
     let mass_nearest = nearest_eigenvalues(&main);
@@ -526,6 +546,7 @@ pub fn reproduce(
     let mut dynamics = Vec::new();
     for net in ControlNet::ALL {
         for rest in [RestShape::Initial, RestShape::Zero] {
+            cancelled()?;
             dynamics.extend(dynamics_readings(
                 base,
                 net,

@@ -12,7 +12,7 @@ use nurbspring_derive::{
 use nurbspring_dnurbs::{DnurbsOptions, Loads, Material};
 use nurbspring_io::output::{write_csv, write_json};
 use nurbspring_io::plot::{PlotOptions, Series, plot_series_with, plot_spectrum};
-use nurbspring_msm::{Class, Constants, FileSimulation, SpringKind};
+use nurbspring_msm::{Class, Constants, FileSimulation, MsmFile, SpringKind};
 use nurbspring_sim::IntegratorKind;
 use serde::Serialize;
 
@@ -234,6 +234,19 @@ fn run_settings(scene: &Scene, d: &Derivation) -> FileSimulation {
     }
 }
 
+/// The `msm.json` of a derivation with a lattice (`None` for a node reduction): the lattice,
+/// the scene it came from, its initial velocities and the run settings it was validated with.
+pub fn derived_msm_file(scene_label: &str, scene: &Scene, d: &Derivation) -> Option<MsmFile> {
+    d.lattice.as_ref().map(|lattice| {
+        msm_file(
+            lattice,
+            scene_label,
+            &d.node_velocities,
+            run_settings(scene, d),
+        )
+    })
+}
+
 /// Writes msm.json (or reduction.json), report.json, report.md, central_node.csv, the plots
 /// and the lattice into `out` (each file atomically). `paper_table` is the text of the
 /// reproduction table (empty unless this is the paper's experiment).
@@ -246,12 +259,7 @@ pub fn write_derivation(
     paper_table: &str,
 ) -> Result<(), Error> {
     if let Some(lattice) = &d.lattice {
-        let msm = msm_file(
-            lattice,
-            scene_label,
-            &d.node_velocities,
-            run_settings(scene, d),
-        );
+        let msm = derived_msm_file(scene_label, scene, d).expect("the derivation has a lattice");
         write_json(out.join("msm.json"), &msm)?;
         write_lattice_obj(&out.join("lattice.obj"), lattice)?;
         write_lattice_vtu(&out.join("lattice.vtu"), lattice)?;

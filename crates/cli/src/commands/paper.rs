@@ -27,9 +27,12 @@ pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
     let config = scene.derivation_config(Some(nurbspring_derive::Method::Paper))?;
     let staged = stage_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
-    let (derivation, report) =
-        nurbspring_derive::paper::reproduce(&config, &mut |done, total| bar.update(done, total))
-            .map_err(|e| nurbspring_scene::Error::model(&scene.path, None, e))?;
+    let (derivation, report) = nurbspring_derive::paper::reproduce_cancellable(
+        &config,
+        Some(ctx.cancel.clone()),
+        &mut |done, total| bar.update(done, total),
+    )
+    .map_err(|e| nurbspring_scene::Error::model(&scene.path, None, e))?;
     bar.finish();
     let table = verdict_table(&report);
     write_derivation(
