@@ -394,6 +394,15 @@ fn run_dict<'py>(py: Python<'py>, run: &Simulated) -> PyResult<Bound<'py, PyDict
     )?;
     out.set_item("kinetic", f64_bytes(py, traj.energy.iter().map(|e| e[0])))?;
     out.set_item("elastic", f64_bytes(py, traj.energy.iter().map(|e| e[1])))?;
+    // `+ 0.0` as energy.csv writes it: an unloaded model's `−0` load potential is 0.
+    out.set_item(
+        "external",
+        f64_bytes(py, traj.energy.iter().map(|e| e[2] + 0.0)),
+    )?;
+    out.set_item(
+        "total",
+        f64_bytes(py, traj.energy.iter().map(|e| e[0] + e[1] + e[2])),
+    )?;
     out.set_item("integrator", run.integrator.to_string())?;
     out.set_item("dt", run.dt)?;
     out.set_item("t_end", run.t_end)?;

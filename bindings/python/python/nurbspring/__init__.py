@@ -238,10 +238,12 @@ def _run(raw: Dict[str, Any]) -> Dict[str, Any]:
     t = _f64(raw["t"], (-1,))
     kinetic = _f64(raw["kinetic"], (-1,))
     elastic = _f64(raw["elastic"], (-1,))
+    external = _f64(raw["external"], (-1,))
+    total = _f64(raw["total"], (-1,))
     return {
         "t": t,
         "probes": _f64(raw["probes"], (t.size, raw["n_probes"], 3)),
-        "energy": {"kinetic": kinetic, "elastic": elastic, "total": kinetic + elastic},
+        "energy": {"kinetic": kinetic, "elastic": elastic, "external": external, "total": total},
         "integrator": raw["integrator"],
         "dt": raw["dt"],
         "t_end": raw["t_end"],
@@ -341,7 +343,8 @@ def simulate(
     its stability limit; ``progress=True`` shows the steps on stderr.
 
     Returns ``{"t": (T,) [s], "probes": (T, P, 3) [m], "energy": {"kinetic", "elastic",
-    "total"}: (T,) each [J], "integrator", "dt", "t_end", "stopped", "warnings"}``; probe 0
+    "external", "total"}: (T,) each [J] (elastic without the load; external: the load's
+    potential; total: their sum), "integrator", "dt", "t_end", "stopped", "warnings"}``; probe 0
     is the point (node) at the centre of the parameter domain, then the scene's probes.
     These are the samples of the CLI's trajectory.csv and energy.csv.
     """

@@ -121,7 +121,7 @@ def simulate(
     force_unstable: bool = False,
     progress: bool = False,
 ) -> Dict[str, Any]:
-    """{"t": (T,) [s], "probes": (T, P, 3) [m], "energy": {"kinetic", "elastic", "total"}: (T,)
+    """{"t": (T,) [s], "probes": (T, P, 3) [m], "energy": {"kinetic", "elastic", "external", "total"}: (T,)
     [J], "integrator", "dt", "t_end", "stopped", "warnings"}."""
 
 def derive(
