@@ -13,7 +13,7 @@ use std::sync::mpsc::{RecvTimeoutError, channel};
 use std::time::Duration;
 
 use nurbspring_derive::{Derivation, Method, Trajectory};
-use nurbspring_scene::export::{DofsFile, dof_ordering};
+use nurbspring_scene::export::DofsFile;
 use nurbspring_scene::msm_file::{MsmSetup, msm_setup_from_text, read_msm_file};
 use nurbspring_scene::report::{Report, derived_msm_file};
 use nurbspring_scene::run::{RunRequest, Simulated, simulate_dnurbs, simulate_msm};
@@ -335,18 +335,7 @@ fn csr<'py>(
 fn matrices<'py>(py: Python<'py>, scene: &Scene) -> PyResult<Bound<'py, PyDict>> {
     let model = run_blocking(py, |_| scene.inner.build_dnurbs())?.map_err(py_err)?;
     let m = model.matrices();
-    let dof_map = model.dof_map();
-    let dofs = DofsFile {
-        ordering: dof_ordering(m.dofs_per_point),
-        dofs_per_point: m.dofs_per_point,
-        n_control_points: model.geometry().n_control_points(),
-        n_dofs: dof_map.n_total(),
-        fixed_dofs: dof_map.fixed(),
-        free_dofs: dof_map.free(),
-        fixed_control_points: model.fixed_points(),
-        files: serde_json::json!({"M": "M.mtx", "D": "D.mtx", "K": "K.mtx", "f": "f.mtx"}),
-        matrices_cover: "all dofs, before constraints are applied",
-    };
+    let dofs = DofsFile::of(&model);
     let out = PyDict::new(py);
     out.set_item("M", csr(py, &m.mass))?;
     out.set_item("D", csr(py, &m.damping))?;

@@ -433,6 +433,25 @@ pub struct DofsFile<'a> {
     pub matrices_cover: &'static str,
 }
 
+impl<'a> DofsFile<'a> {
+    /// The dof map of `model`'s matrices, as `dofs.json` holds it.
+    pub fn of(model: &'a nurbspring_dnurbs::DnurbsModel) -> Self {
+        let m = model.matrices();
+        let dof_map = model.dof_map();
+        DofsFile {
+            ordering: dof_ordering(m.dofs_per_point),
+            dofs_per_point: m.dofs_per_point,
+            n_control_points: model.geometry().n_control_points(),
+            n_dofs: dof_map.n_total(),
+            fixed_dofs: dof_map.fixed(),
+            free_dofs: dof_map.free(),
+            fixed_control_points: model.fixed_points(),
+            files: serde_json::json!({"M": "M.mtx", "D": "D.mtx", "K": "K.mtx", "f": "f.mtx"}),
+            matrices_cover: "all dofs, before constraints are applied",
+        }
+    }
+}
+
 /// What [`write_matrices`] wrote.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct MatricesWritten {
@@ -468,21 +487,8 @@ pub fn write_matrices(
     write_matrix_market_symmetric(out.join("D.mtx"), &m.damping, &comment)?;
     write_matrix_market_symmetric(out.join("K.mtx"), &m.stiffness, &comment)?;
     write_matrix_market_vector(out.join("f.mtx"), &m.force, &comment)?;
+    write_json(out.join("dofs.json"), &DofsFile::of(model))?;
     let dof_map = model.dof_map();
-    write_json(
-        out.join("dofs.json"),
-        &DofsFile {
-            ordering,
-            dofs_per_point: m.dofs_per_point,
-            n_control_points: model.geometry().n_control_points(),
-            n_dofs: dof_map.n_total(),
-            fixed_dofs: dof_map.fixed(),
-            free_dofs: dof_map.free(),
-            fixed_control_points: model.fixed_points(),
-            files: serde_json::json!({"M": "M.mtx", "D": "D.mtx", "K": "K.mtx", "f": "f.mtx"}),
-            matrices_cover: "all dofs, before constraints are applied",
-        },
-    )?;
     Ok(MatricesWritten {
         dofs: dof_map.n_total(),
         free_dofs: dof_map.n_free(),
