@@ -11,7 +11,7 @@ use crate::outcome::{FrequencyRow, MassReport, ProbeError, Validation};
 use crate::reference::{ReferenceKind, Watch, run_scalar, scalar_rows};
 use crate::scalar::{EnergyOrigin, ScalarSystem};
 use crate::setup::{Method, Setup};
-use crate::validation::{compare, compare_points, mac};
+use crate::validation::{compare, compare_points, energy_drift, mac};
 use crate::{DeriveError, Trajectory};
 
 /// The validation horizon covers at least this many periods of the lowest mode.
@@ -156,6 +156,8 @@ pub fn validation(
         dnurbs_period: central.reference_period,
         msm_period: if complete { central.other_period } else { None },
         samples: central.samples,
+        dnurbs_energy_drift: energy_drift(reference),
+        msm_energy_drift: energy_drift(msm),
         msm_stopped: msm.stopped.clone(),
         probes,
     }
