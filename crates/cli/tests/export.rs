@@ -754,7 +754,10 @@ fn meshio_snippet_reads_the_springs_from_the_npz() {
         serde_json::from_str(&std::fs::read_to_string(derived.join("msm.json")).unwrap()).unwrap();
     let springs = msm["springs"].as_array().unwrap().len();
     assert!(springs > 0);
-    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), springs.to_string());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        springs.to_string()
+    );
 }
 
 /// The `.npz` arrays, read back with NumPy: names, shapes, dtypes and values.

@@ -82,7 +82,12 @@ fn energy_error(a: &Trajectory, b: &Trajectory, every: usize) -> [f64; 3] {
     let mut err = [0.0f64; 3];
     for (k, e) in a.energy.iter().enumerate() {
         let f = b.energy[k * every];
-        assert!((a.t[k] - b.t[k * every]).abs() < 1e-9, "{} vs {}", a.t[k], b.t[k * every]);
+        assert!(
+            (a.t[k] - b.t[k * every]).abs() < 1e-9,
+            "{} vs {}",
+            a.t[k],
+            b.t[k * every]
+        );
         for i in 0..3 {
             err[i] = err[i].max((e[i] - f[i]).abs() / scale);
         }
@@ -117,7 +122,10 @@ fn modal_reference_energies_match_a_time_stepped_dnurbs() {
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), e| {
                     (l.min(e[i]), h.max(e[i]))
                 });
-            assert!(hi - lo > 1e-3 * (hi.abs() + lo.abs()), "{rest_shape:?} energy {i}: {lo}..{hi}");
+            assert!(
+                hi - lo > 1e-3 * (hi.abs() + lo.abs()),
+                "{rest_shape:?} energy {i}: {lo}..{hi}"
+            );
         }
         // Conserved to round-off.
         let drift = total_drift(&exact);
@@ -135,7 +143,10 @@ fn modal_reference_energies_match_a_time_stepped_dnurbs() {
         }
         assert!(errors[1] < 2e-3, "{rest_shape:?}: {errors:?}");
         let ratio = errors[0] / errors[1];
-        assert!((3.0..5.0).contains(&ratio), "{rest_shape:?}: error ratio {ratio}");
+        assert!(
+            (3.0..5.0).contains(&ratio),
+            "{rest_shape:?}: error ratio {ratio}"
+        );
     }
 }
 
@@ -153,7 +164,15 @@ fn damped_reference_energies_are_the_dnurbs_energies() {
         .unwrap();
     let e = energy_error(&reference, &stepped, 1);
     assert!(e.iter().all(|&x| x < 1e-9), "{e:?}");
-    let total: Vec<f64> = reference.energy.iter().map(|e| e[0] + e[1] + e[2]).collect();
-    assert!(total.windows(2).all(|w| w[1] <= w[0] + 1e-12 * w[0].abs().max(1.0)));
+    let total: Vec<f64> = reference
+        .energy
+        .iter()
+        .map(|e| e[0] + e[1] + e[2])
+        .collect();
+    assert!(
+        total
+            .windows(2)
+            .all(|w| w[1] <= w[0] + 1e-12 * w[0].abs().max(1.0))
+    );
     assert!(total.last().unwrap() < &total[0]);
 }

@@ -226,7 +226,12 @@ impl VtkUnstructured {
         check_arrays("point", &self.point_data, n)?;
         check_arrays("cell", &self.cell_data, self.cells.len())?;
         check_strings("point", &self.point_strings, &self.point_data, n)?;
-        check_strings("cell", &self.cell_strings, &self.cell_data, self.cells.len())
+        check_strings(
+            "cell",
+            &self.cell_strings,
+            &self.cell_data,
+            self.cells.len(),
+        )
     }
 
     /// Renders the XML text of the `.vtu` file.

@@ -570,7 +570,12 @@ mod tests {
         let lattice = SpringLattice::from_surface(&surface, &options, &[]).unwrap();
         let grid = lattice_grid(&lattice, &lattice.flat_positions());
         grid.validate().unwrap();
-        let codes = &grid.cell_data.iter().find(|a| a.name == "kind").unwrap().values;
+        let codes = &grid
+            .cell_data
+            .iter()
+            .find(|a| a.name == "kind")
+            .unwrap()
+            .values;
         let names = &grid.cell_strings[0];
         assert_eq!(names.name, "kind_name");
         assert_eq!(names.values.len(), lattice.springs.len());
