@@ -701,9 +701,11 @@ fn matrices_and_derive_print_json() {
         "{central}"
     );
     let energy = svg("energy.svg");
-    // (The D-NURBS reference of the paper scene is its exact modal solution, which records
-    // no energies: only the MSM's curves are drawn.)
+    // Both models: the D-NURBS reference (its exact modal solution, energies in closed form)
+    // and the derived MSM.
     for needle in [
+        "D-NURBS total (kinetic + elastic + load)",
+        "D-NURBS kinetic",
         "derived MSM total (kinetic + elastic + load)",
         "derived MSM kinetic",
         "energy / largest kinetic + elastic energy of the model",

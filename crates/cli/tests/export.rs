@@ -709,6 +709,57 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
     }
 }
 
+/// The meshio snippet of docs/export.md ("The lattice in other tools") turns the `.npz` of the
+/// paper derivation into a mesh whose `line` cells are the springs, and meshio reads the VTU it
+/// writes back. Skipped when no Python with meshio is found (`NURBSPRING_PYTHON`).
+#[test]
+fn meshio_snippet_reads_the_springs_from_the_npz() {
+    let Some(python) = python_with("meshio") else {
+        return;
+    };
+    let doc = std::fs::read_to_string(root().join("docs/export.md")).unwrap();
+    let at = doc.find("```python\nimport meshio").unwrap() + "```python\n".len();
+    let snippet = &doc[at..at + doc[at..].find("```").unwrap()];
+    let dir = tempfile::tempdir().unwrap();
+    let derived = dir.path().join("d");
+    bin()
+        .arg("derive")
+        .arg(examples().join("paper.toml"))
+        .args(["--derivation", "paper", "-q", "--out"])
+        .arg(&derived)
+        .assert()
+        .success();
+    bin()
+        .arg("export")
+        .arg(derived.join("msm.json"))
+        .args(["--format", "npz", "--out"])
+        .arg(dir.path().join("msm.npz"))
+        .assert()
+        .success();
+    let check = "\nback = meshio.read('lattice_meshio.vtu')\n\
+                 assert back.cells[0].type == 'line'\n\
+                 assert np.array_equal(back.cells[0].data, z['springs'])\n\
+                 print(len(back.cells[0].data))\n";
+    let out = Process::new(&python)
+        .current_dir(dir.path())
+        .args(["-c", &format!("{snippet}{check}")])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let msm: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(derived.join("msm.json")).unwrap()).unwrap();
+    let springs = msm["springs"].as_array().unwrap().len();
+    assert!(springs > 0);
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        springs.to_string()
+    );
+}
+
 /// The `.npz` arrays, read back with NumPy: names, shapes, dtypes and values.
 #[test]
 fn npz_export_holds_the_model() {

@@ -9,9 +9,9 @@ use nurbspring_sim::State;
 use crate::modal_solution::ModalBasis;
 use crate::outcome::{FrequencyRow, MassReport, ProbeError, Validation};
 use crate::reference::{ReferenceKind, Watch, run_scalar, scalar_rows};
-use crate::scalar::ScalarSystem;
+use crate::scalar::{EnergyOrigin, ScalarSystem};
 use crate::setup::{Method, Setup};
-use crate::validation::{compare, compare_points, mac};
+use crate::validation::{compare, compare_points, energy_drift, mac};
 use crate::{DeriveError, Trajectory};
 
 /// The validation horizon covers at least this many periods of the lowest mode.
@@ -156,6 +156,8 @@ pub fn validation(
         dnurbs_period: central.reference_period,
         msm_period: if complete { central.other_period } else { None },
         samples: central.samples,
+        dnurbs_energy_drift: energy_drift(reference),
+        msm_energy_drift: energy_drift(msm),
         msm_stopped: msm.stopped.clone(),
         probes,
     }
@@ -251,14 +253,17 @@ pub fn initial_speed(state: &State) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The scalar system with a different initial state and no load (the second excitation).
+/// The scalar system with a different initial state and no load (the second excitation): at
+/// rest at `u = 0`, no load potential.
 pub fn unloaded(
     system: &ScalarSystem,
     displacement: Vec<[f64; 3]>,
     velocity: Vec<[f64; 3]>,
 ) -> ScalarSystem {
+    let load = vec![[0.0; 3]; system.n()];
     ScalarSystem {
-        load: vec![[0.0; 3]; system.n()],
+        energy: EnergyOrigin::of_load(&load, &displacement),
+        load,
         displacement,
         velocity,
         ..system.clone()

@@ -77,7 +77,7 @@ pub use pipeline::{
 };
 pub use reference::ReferenceKind;
 pub use runner::{Recording, Watched, record, record_noted};
-pub use scalar::ScalarSystem;
+pub use scalar::{EnergyOrigin, ScalarSystem};
 pub use setup::{
     Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Method, Setup, TimeSettings,
 };

@@ -23,7 +23,7 @@ use crate::outcome::{
 };
 use crate::pipeline::Judge;
 use crate::reference::{run_scalar, scalar_rows};
-use crate::scalar::ScalarSystem;
+use crate::scalar::{EnergyOrigin, ScalarSystem};
 use crate::setup::{Config, Method, Setup};
 
 /// A load below this fraction of the largest is no load (round-off).
@@ -222,13 +222,15 @@ fn node_system(
             .map(|&a| v.get(a).copied().unwrap_or([0.0; 3]))
             .collect()
     };
+    let displacement = pick(&nodes.displacements);
     let system = ScalarSystem {
         free: map.free.clone(),
         mass,
         stiffness,
         damping_ratio,
+        energy: EnergyOrigin::of_load(&load, &displacement),
         load,
-        displacement: pick(&nodes.displacements),
+        displacement,
         velocity: pick(&nodes.velocities),
     };
     let basis = ModalBasis::new(&system.stiffness, &system.mass)?;

@@ -5,6 +5,7 @@
 use nurbspring_linalg::{DenseMatrix, SparseMatrix, generalized_symmetric_eigen};
 
 use crate::DeriveError;
+use crate::scalar::{EnergyOrigin, dot};
 
 /// Largest system solved by dense modes.
 pub const MAX_MODAL: usize = 4000;
@@ -95,7 +96,11 @@ impl ModalBasis {
 
     /// The displacement at the points `watch` (rows: weights of the unknowns, so a point is
     /// `Σ_a watch[p][a] u_a`) at each time of `times`, from displacement `u0`, velocity `v0`
-    /// and constant load `f` (each one `[x, y, z]` per unknown).
+    /// and constant load `f` (each one `[x, y, z]` per unknown); with `energy`, also the
+    /// `[kinetic, elastic, external]` energies at each time, in closed form from the modal
+    /// coordinates (M-orthonormal modes, `u = Φ η`): kinetic `½ Σ η̇²`, elastic
+    /// `E₀ + hᵀ η + ½ Σ ω² η²` and load potential `V₀ − gᵀ η`, with `h = Φᵀ internal` and
+    /// `g = Φᵀ force` of the [`EnergyOrigin`] (the static load offset is part of `η`).
     pub fn response(
         &self,
         watch: &[Vec<(usize, f64)>],
@@ -103,13 +108,15 @@ impl ModalBasis {
         u0: &[[f64; 3]],
         v0: &[[f64; 3]],
         f: &[[f64; 3]],
-    ) -> Vec<Vec<[f64; 3]>> {
+        energy: Option<&EnergyOrigin>,
+    ) -> (Vec<Vec<[f64; 3]>>, Vec<[f64; 3]>) {
         let r = self.len();
         let (e0, e1, g) = (
             self.project_mass(u0),
             self.project_mass(v0),
             self.project(f),
         );
+        let origin = energy.map(|e| (e, self.project(&e.internal), self.project(&e.force)));
         // The watched combinations of each mode.
         let shapes: Vec<Vec<f64>> = watch
             .iter()
@@ -120,17 +127,22 @@ impl ModalBasis {
             })
             .collect();
         let mut out = vec![Vec::with_capacity(times.len()); watch.len()];
+        let mut energies = Vec::with_capacity(if energy.is_some() { times.len() } else { 0 });
         let mut eta = vec![[0.0; 3]; r];
+        let mut rate = vec![[0.0; 3]; r];
         for &t in times {
             for i in 0..r {
                 let (w, l) = (self.omega[i], self.lambda[i]);
-                let (c, s, q) = if l > 0.0 {
-                    ((w * t).cos(), (w * t).sin() / w, (1.0 - (w * t).cos()) / l)
+                // η = c e0 + s e1 + q g and η̇ = c' e0 + s' e1 + q' g.
+                let ((c, s, q), (dc, ds, dq)) = if l > 0.0 {
+                    let (cos, sin) = ((w * t).cos(), (w * t).sin());
+                    ((cos, sin / w, (1.0 - cos) / l), (-w * sin, cos, sin / w))
                 } else {
-                    (1.0, t, 0.5 * t * t)
+                    ((1.0, t, 0.5 * t * t), (0.0, 1.0, t))
                 };
                 for x in 0..3 {
                     eta[i][x] = c * e0[i][x] + s * e1[i][x] + q * g[i][x];
+                    rate[i][x] = dc * e0[i][x] + ds * e1[i][x] + dq * g[i][x];
                 }
             }
             for (p, shape) in shapes.iter().enumerate() {
@@ -142,7 +154,18 @@ impl ModalBasis {
                 }
                 out[p].push(d);
             }
+            if let Some((e, h, fe)) = &origin {
+                let kinetic = 0.5 * dot(&rate, &rate);
+                let strain: f64 = (0..r)
+                    .map(|i| 0.5 * self.lambda[i] * dot(&eta[i..=i], &eta[i..=i]))
+                    .sum();
+                energies.push([
+                    kinetic,
+                    e.elastic + dot(h, &eta) + strain,
+                    e.external - dot(fe, &eta),
+                ]);
+            }
         }
-        out
+        (out, energies)
     }
 }

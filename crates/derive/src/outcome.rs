@@ -97,6 +97,15 @@ pub struct Validation {
     pub msm_period: Option<f64>,
     /// Samples compared.
     pub samples: usize,
+    /// The largest change of the D-NURBS's total energy (kinetic + elastic + load) over the
+    /// comparison, relative to its largest kinetic + elastic energy: zero without damping up
+    /// to the integrator's error (round-off for the exact modal reference), the share
+    /// dissipated with damping. Absent when the run recorded no energies.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dnurbs_energy_drift: Option<f64>,
+    /// The same for the MSM run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub msm_energy_drift: Option<f64>,
     /// Why the MSM run stopped early, if it did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub msm_stopped: Option<String>,

@@ -47,7 +47,8 @@ pub fn sample_times(horizon: f64, dt: f64) -> (f64, Vec<f64>) {
     (dt, (0..=steps).map(|k| k as f64 * dt).collect())
 }
 
-/// Runs the scalar system `sys` and records the watched points at `times` (spaced `dt`):
+/// Runs the scalar system `sys` and records the watched points and the energies (as the model
+/// it stands for counts them, [`crate::scalar::EnergyOrigin`]) at `times` (spaced `dt`):
 /// exactly by `basis` when undamped, by Newmark otherwise.
 pub fn run_scalar(
     sys: &ScalarSystem,
@@ -60,7 +61,15 @@ pub fn run_scalar(
     traj.t = times.to_vec();
     if sys.damping_ratio == 0.0 {
         let weights: Vec<Vec<(usize, f64)>> = watch.iter().map(|w| w.weights.clone()).collect();
-        let response = basis.response(&weights, times, &sys.displacement, &sys.velocity, &sys.load);
+        let (response, energy) = basis.response(
+            &weights,
+            times,
+            &sys.displacement,
+            &sys.velocity,
+            &sys.load,
+            Some(&sys.energy),
+        );
+        traj.energy = energy;
         for (p, (w, r)) in watch.iter().zip(response).enumerate() {
             traj.probes[p] = r
                 .iter()
@@ -88,7 +97,9 @@ pub fn run_scalar(
     let t_end = times.last().copied().unwrap_or(0.0);
     let opts = RunOptions::new(dt, t_end, IntegratorKind::Newmark);
     let mut probes = vec![Vec::with_capacity(times.len()); watch.len()];
+    let mut energy = Vec::with_capacity(times.len());
     let mut observer = |s: &Sample<'_>| {
+        energy.push(sys.energies(&crate::scalar::points(s.q), &crate::scalar::points(s.v)));
         for (p, w) in watch.iter().enumerate() {
             let mut x = w.base;
             for &(a, c) in &w.weights {
@@ -101,6 +112,7 @@ pub fn run_scalar(
     };
     simulate(&model, initial, &opts, &mut observer)?;
     traj.probes = probes;
+    traj.energy = energy;
     traj.t.truncate(traj.probes.first().map_or(0, Vec::len));
     Ok((traj, ReferenceKind::Newmark))
 }

@@ -28,6 +28,45 @@ pub struct ScalarSystem {
     pub displacement: Vec<[f64; 3]>,
     /// Initial velocity per unknown.
     pub velocity: Vec<[f64; 3]>,
+    /// What its energies are measured from: those of the model it stands for.
+    pub energy: EnergyOrigin,
+}
+
+/// The energies of a scalar system as the model it stands for counts them (energy.csv's
+/// `kinetic, elastic, external` convention, docs/scenes.md): at displacement `u` the elastic
+/// energy is `elastic + Σ internal · u + ½ uᵀ K u` and the load potential `external −
+/// Σ force · u`, with `load = force − internal` (so the total is conserved without damping).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnergyOrigin {
+    /// The elastic energy at `u = 0`.
+    pub elastic: f64,
+    /// The internal force at `u = 0` per unknown (the gradient of the elastic energy there).
+    pub internal: Vec<[f64; 3]>,
+    /// The load potential at `u = 0`.
+    pub external: f64,
+    /// The external force per unknown.
+    pub force: Vec<[f64; 3]>,
+}
+
+impl EnergyOrigin {
+    /// A system at rest at `u = 0` under `load`, its load potential `−(u − u0) · load` zero at
+    /// the initial displacement `u0` (an MSM's convention).
+    pub fn of_load(load: &[[f64; 3]], u0: &[[f64; 3]]) -> Self {
+        Self {
+            elastic: 0.0,
+            internal: vec![[0.0; 3]; load.len()],
+            external: dot(load, u0),
+            force: load.to_vec(),
+        }
+    }
+}
+
+/// `Σ_a Σ_x a[a][x] b[a][x]`.
+pub(crate) fn dot(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x[0] * y[0] + x[1] * y[1] + x[2] * y[2])
+        .sum()
 }
 
 /// Rows `3a + x` of an interleaved vector as points.
@@ -80,17 +119,24 @@ impl ScalarSystem {
             .fold(0.0, f64::max);
         let q_scale = q0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let rounding = 1e3 * f64::EPSILON * k_scale * q_scale;
-        let load: Vec<f64> = model
-            .reduced_force()
+        let f_ext = model.reduced_force();
+        // The internal force at the reference with its rounding removed where it leaves no
+        // load, so that `load = f_ext − internal` exactly as the energies count it.
+        let internal: Vec<f64> = f_ext
             .iter()
             .zip(&f_int)
-            .map(|(f, g)| {
-                let l = f - g;
-                if l.abs() <= rounding { 0.0 } else { l }
-            })
+            .map(|(f, g)| if (f - g).abs() <= rounding { *f } else { *g })
             .collect();
+        let load: Vec<f64> = f_ext.iter().zip(&internal).map(|(f, g)| f - g).collect();
         let u0: Vec<f64> = initial.q.iter().zip(&q0).map(|(a, b)| a - b).collect();
         let material = model.material();
+        // The D-NURBS's own energies (its `DynamicModel` potentials) at the reference q0.
+        let energy = EnergyOrigin {
+            elastic: model.potential_energy(&q0),
+            internal: points(&internal),
+            external: model.external_potential(0.0, &q0),
+            force: points(f_ext),
+        };
         Ok(Self {
             free,
             mass,
@@ -99,12 +145,22 @@ impl ScalarSystem {
             load: points(&load),
             displacement: points(&u0),
             velocity: points(&initial.v),
+            energy,
         })
     }
 
     /// Number of unknowns.
     pub fn n(&self) -> usize {
         self.free.len()
+    }
+
+    /// `[kinetic, elastic, external]` at displacement `u` and velocity `v`: `½ vᵀ M v`, the
+    /// elastic energy and the load potential of [`EnergyOrigin`].
+    pub fn energies(&self, u: &[[f64; 3]], v: &[[f64; 3]]) -> [f64; 3] {
+        let e = &self.energy;
+        let kinetic = 0.5 * dot(v, &apply3(&self.mass, v));
+        let elastic = e.elastic + dot(&e.internal, u) + 0.5 * dot(u, &apply3(&self.stiffness, u));
+        [kinetic, elastic, e.external - dot(&e.force, u)]
     }
 }
 

@@ -34,6 +34,25 @@ impl Trajectory {
     }
 }
 
+/// `max_t |E(t) − E(0)| / max_t (kinetic + elastic)` of the total energy `E = kinetic +
+/// elastic + external` of `traj` (`None` when it recorded no energies; 0 for a model that
+/// never moves).
+pub fn energy_drift(traj: &Trajectory) -> Option<f64> {
+    let total = |e: &[f64; 3]| e[0] + e[1] + e[2];
+    let e0 = total(traj.energy.first()?);
+    let scale = traj
+        .energy
+        .iter()
+        .map(|e| e[0] + e[1])
+        .fold(0.0_f64, f64::max);
+    let change = traj
+        .energy
+        .iter()
+        .map(|e| (total(e) - e0).abs())
+        .fold(0.0_f64, f64::max);
+    Some(if scale > 0.0 { change / scale } else { change })
+}
+
 /// Errors between a reference series and another, sampled at the same times.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Comparison {
@@ -130,6 +149,19 @@ pub fn dominant_period(t: &[f64], z: &[f64]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Totals 1, 1, 0.9 (with a load potential) over a largest kinetic + elastic of 1.25: a
+    /// drift of 0.1 / 1.25; no energies, none; a model at rest, 0.
+    #[test]
+    fn energy_drift_is_relative_to_the_largest_kinetic_and_elastic_energy() {
+        let mut traj = Trajectory::new(0);
+        assert_eq!(energy_drift(&traj), None);
+        traj.energy = vec![[1.0, 0.0, 0.0], [0.75, 0.5, -0.25], [0.0, 1.1, -0.2]];
+        let d = energy_drift(&traj).unwrap();
+        assert!((d - 0.08).abs() < 1e-15, "{d}");
+        traj.energy = vec![[0.0; 3]; 4];
+        assert_eq!(energy_drift(&traj), Some(0.0));
+    }
 
     #[test]
     fn identical_series_have_zero_error() {

@@ -7,6 +7,12 @@
 //! uncompressed. Coordinates and data arrays are `Float64`, connectivity and offsets `Int64`,
 //! cell types `UInt8`. An ASCII encoding is available for debugging.
 //!
+//! Unstructured grids also carry string arrays ([`StringArray`], `type="String"`, VTK's
+//! `vtkStringArray`), e.g. the name of each cell's category: in binary the UTF-8 bytes of the
+//! strings, each followed by a NUL byte, behind the same byte-count header; in ASCII the same
+//! bytes as decimal numbers separated by spaces (each string ending in `0`), as VTK's
+//! `vtkXMLWriter` writes them. `NumberOfTuples` gives the number of strings.
+//!
 //! ```
 //! use nurbspring_io::vtk::{Cell, DataArray, VtkUnstructured};
 //! # let dir = tempfile::tempdir().unwrap();
@@ -141,6 +147,27 @@ impl DataArray {
     }
 }
 
+/// A named array of strings attached to points or cells, one string per point or cell
+/// (VTK's `vtkStringArray`, `type="String"`): e.g. the name of a category next to its integer
+/// code. Strings must not contain NUL bytes (they terminate each string in the file).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StringArray {
+    /// Name shown in ParaView (non-empty, unique among all arrays of its point or cell data).
+    pub name: String,
+    /// One string per point or cell.
+    pub values: Vec<String>,
+}
+
+impl StringArray {
+    /// An array of one string per point or cell.
+    pub fn new(name: impl Into<String>, values: Vec<String>) -> Self {
+        Self {
+            name: name.into(),
+            values,
+        }
+    }
+}
+
 impl<S: Into<String>> From<(S, usize, Vec<f64>)> for DataArray {
     fn from((name, components, values): (S, usize, Vec<f64>)) -> Self {
         Self::new(name, components, values)
@@ -158,6 +185,10 @@ pub struct VtkUnstructured {
     pub point_data: Vec<DataArray>,
     /// Arrays with one tuple per cell.
     pub cell_data: Vec<DataArray>,
+    /// String arrays with one string per point (written after `point_data`).
+    pub point_strings: Vec<StringArray>,
+    /// String arrays with one string per cell (written after `cell_data`).
+    pub cell_strings: Vec<StringArray>,
 }
 
 impl VtkUnstructured {
@@ -193,7 +224,14 @@ impl VtkUnstructured {
             }
         }
         check_arrays("point", &self.point_data, n)?;
-        check_arrays("cell", &self.cell_data, self.cells.len())
+        check_arrays("cell", &self.cell_data, self.cells.len())?;
+        check_strings("point", &self.point_strings, &self.point_data, n)?;
+        check_strings(
+            "cell",
+            &self.cell_strings,
+            &self.cell_data,
+            self.cells.len(),
+        )
     }
 
     /// Renders the XML text of the `.vtu` file.
@@ -209,8 +247,8 @@ impl VtkUnstructured {
                 self.cells.len()
             ),
         );
-        x.data_section("PointData", &self.point_data)?;
-        x.data_section("CellData", &self.cell_data)?;
+        x.data_section("PointData", &self.point_data, &self.point_strings)?;
+        x.data_section("CellData", &self.cell_data, &self.cell_strings)?;
         x.points(&self.points)?;
         x.open("Cells", "");
         let connectivity: Vec<i64> = self
@@ -339,8 +377,8 @@ impl VtkStructured {
         let mut x = XmlWriter::new(format, "StructuredGrid");
         x.open("StructuredGrid", &format!(" WholeExtent=\"{extent}\""));
         x.open("Piece", &format!(" Extent=\"{extent}\""));
-        x.data_section("PointData", &pd)?;
-        x.data_section("CellData", &cd)?;
+        x.data_section("PointData", &pd, &[])?;
+        x.data_section("CellData", &cd, &[])?;
         x.points(&points)?;
         x.close("Piece");
         x.close("StructuredGrid");
@@ -452,6 +490,39 @@ fn check_arrays(kind: &str, arrays: &[DataArray], count: usize) -> Result<(), St
     Ok(())
 }
 
+/// Checks the string arrays of one section: non-empty names unique among every array of the
+/// section, one string per point or cell, no NUL byte.
+fn check_strings(
+    kind: &str,
+    strings: &[StringArray],
+    numeric: &[DataArray],
+    count: usize,
+) -> Result<(), String> {
+    for (k, a) in strings.iter().enumerate() {
+        if a.name.is_empty() {
+            return Err(format!("{kind} string array {k} has an empty name"));
+        }
+        if strings[..k].iter().any(|b| b.name == a.name) || numeric.iter().any(|b| b.name == a.name)
+        {
+            return Err(format!("{kind} data array name `{}` is used twice", a.name));
+        }
+        if a.values.len() != count {
+            return Err(format!(
+                "{kind} string array `{}` has {} strings, expected one per {kind}: {count}",
+                a.name,
+                a.values.len()
+            ));
+        }
+        if let Some(i) = a.values.iter().position(|v| v.contains('\0')) {
+            return Err(format!(
+                "{kind} string array `{}`, string {i} contains a NUL byte, which VTK reads as its end",
+                a.name
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Escapes text for an XML attribute value.
 fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
@@ -550,13 +621,77 @@ impl XmlWriter {
         self.out
     }
 
-    fn data_section(&mut self, tag: &str, arrays: &[DataArray]) -> Result<(), String> {
+    fn data_section(
+        &mut self,
+        tag: &str,
+        arrays: &[DataArray],
+        strings: &[StringArray],
+    ) -> Result<(), String> {
         self.open(tag, "");
         for a in arrays {
             self.array(Some(&a.name), a.components, Payload::F64(&a.values))?;
         }
+        for a in strings {
+            self.string_array(a)?;
+        }
         self.close(tag);
         Ok(())
+    }
+
+    /// A `type="String"` array: the strings' bytes, each followed by a NUL byte, in binary
+    /// behind the byte-count header; in ASCII as decimal byte values (VTK's convention).
+    fn string_array(&mut self, a: &StringArray) -> Result<(), String> {
+        let mut bytes = Vec::new();
+        for v in &a.values {
+            bytes.extend_from_slice(v.as_bytes());
+            bytes.push(0);
+        }
+        let ind = self.indent();
+        let encoding = match self.format.encoding {
+            VtkEncoding::Binary => "binary",
+            VtkEncoding::Ascii => "ascii",
+        };
+        let _ = writeln!(
+            self.out,
+            "{ind}<DataArray type=\"String\" Name=\"{}\" NumberOfComponents=\"1\" NumberOfTuples=\"{}\" format=\"{encoding}\">",
+            escape(&a.name),
+            a.values.len()
+        );
+        match self.format.encoding {
+            VtkEncoding::Binary => {
+                let block = self.binary_block(&format!(" `{}`", a.name), &bytes)?;
+                let _ = writeln!(self.out, "{ind}  {}", BASE64.encode(&block));
+            }
+            VtkEncoding::Ascii => {
+                // One string per line.
+                for v in &a.values {
+                    let codes: Vec<String> = v.bytes().map(|b| b.to_string()).collect();
+                    let sep = if codes.is_empty() { "" } else { " " };
+                    let _ = writeln!(self.out, "{ind}  {}{sep}0", codes.join(" "));
+                }
+            }
+        }
+        let _ = writeln!(self.out, "{ind}</DataArray>");
+        Ok(())
+    }
+
+    /// The byte-count header followed by `data`, before base64 encoding.
+    fn binary_block(&self, what: &str, data: &[u8]) -> Result<Vec<u8>, String> {
+        let mut block = Vec::with_capacity(data.len() + 8);
+        match self.format.header {
+            HeaderType::UInt64 => block.extend((data.len() as u64).to_le_bytes()),
+            HeaderType::UInt32 => {
+                let n = u32::try_from(data.len()).map_err(|_| {
+                    format!(
+                        "array{what} has {} bytes, too many for a UInt32 header; use UInt64",
+                        data.len()
+                    )
+                })?;
+                block.extend(n.to_le_bytes());
+            }
+        }
+        block.extend_from_slice(data);
+        Ok(block)
     }
 
     fn points(&mut self, points: &[[f64; 3]]) -> Result<(), String> {
@@ -579,21 +714,7 @@ impl XmlWriter {
         let ind = self.indent();
         match self.format.encoding {
             VtkEncoding::Binary => {
-                let data = payload.le_bytes();
-                let mut block = Vec::with_capacity(data.len() + 8);
-                match self.format.header {
-                    HeaderType::UInt64 => block.extend((data.len() as u64).to_le_bytes()),
-                    HeaderType::UInt32 => {
-                        let n = u32::try_from(data.len()).map_err(|_| {
-                            format!(
-                                "array{name_attr} has {} bytes, too many for a UInt32 header; use UInt64",
-                                data.len()
-                            )
-                        })?;
-                        block.extend(n.to_le_bytes());
-                    }
-                }
-                block.extend_from_slice(&data);
+                let block = self.binary_block(&name_attr, &payload.le_bytes())?;
                 let _ = writeln!(
                     self.out,
                     "{ind}<DataArray type=\"{}\"{name_attr} NumberOfComponents=\"{components}\" format=\"binary\">",

@@ -3,7 +3,8 @@
 
 use base64::Engine as _;
 use nurbspring_io::vtk::{
-    Cell, DataArray, HeaderType, PvdSeries, VtkEncoding, VtkFormat, VtkStructured, VtkUnstructured,
+    Cell, DataArray, HeaderType, PvdSeries, StringArray, VtkEncoding, VtkFormat, VtkStructured,
+    VtkUnstructured,
 };
 use vtkio::Vtk;
 use vtkio::model::{Attribute, CellType, DataSet, Extent, Piece, VertexNumbers};
@@ -200,6 +201,106 @@ fn invalid_grids_are_refused_without_writing() {
     g.cell_data[1].name = "k".into();
     assert!(g.write(&p).unwrap_err().to_string().contains("used twice"));
     assert!(!p.exists());
+}
+
+/// The text between the opening tag of the array named `name` and its `</DataArray>`, with the
+/// opening tag itself.
+fn array_text<'a>(xml: &'a str, name: &str) -> (&'a str, &'a str) {
+    let start = xml
+        .find(&format!("Name=\"{name}\""))
+        .unwrap_or_else(|| panic!("no array {name}"));
+    let open = xml[..start].rfind('<').unwrap();
+    let tag_end = start + xml[start..].find('>').unwrap();
+    let end = tag_end + xml[tag_end..].find("</DataArray>").unwrap();
+    (&xml[open..=tag_end], &xml[tag_end + 1..end])
+}
+
+/// String arrays (vtkio reads none, so the bytes are checked here; scripts/check_vtk_strings.py
+/// reads them with VTK itself): in binary the byte-count header then each string's UTF-8 bytes
+/// and a NUL; in ASCII the same bytes as decimal numbers; `NumberOfTuples` the string count.
+#[test]
+fn string_arrays_are_encoded_as_vtk_reads_them() {
+    let mut g = VtkUnstructured::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]);
+    g.cells = vec![Cell::Line([0, 1]), Cell::Line([1, 2]), Cell::Line([0, 2])];
+    g.cell_data
+        .push(DataArray::scalars("kind", vec![0.0, 1.0, 2.0]));
+    let names = ["structural", "shear", "bend"].map(String::from).to_vec();
+    g.cell_strings.push(StringArray::new("kind_name", names));
+    g.point_strings.push(StringArray::new(
+        "label",
+        vec!["a<b".into(), String::new(), "é".into()],
+    ));
+    let expected: &[u8] = b"structural\0shear\0bend\0";
+    for (header, size) in [(HeaderType::UInt64, 8usize), (HeaderType::UInt32, 4)] {
+        let xml = g
+            .to_xml(VtkFormat {
+                encoding: VtkEncoding::Binary,
+                header,
+            })
+            .unwrap();
+        let (tag, body) = array_text(&xml, "kind_name");
+        assert!(tag.starts_with("<DataArray type=\"String\""), "{tag}");
+        assert!(tag.contains("NumberOfTuples=\"3\""), "{tag}");
+        assert!(tag.contains("format=\"binary\""), "{tag}");
+        let bytes = base64::engine::general_purpose::STANDARD
+            .decode(body.trim())
+            .unwrap();
+        let mut n = [0u8; 8];
+        n[..size].copy_from_slice(&bytes[..size]);
+        // 22 bytes, as VTK 9.7's own writer counts these three names.
+        assert_eq!(u64::from_le_bytes(n), 22);
+        assert_eq!(&bytes[size..], expected);
+        // The string array sits in CellData, after the numeric arrays.
+        let cell = &xml[xml.find("<CellData>").unwrap()..xml.find("</CellData>").unwrap()];
+        assert!(cell.find("Name=\"kind\"").unwrap() < cell.find("Name=\"kind_name\"").unwrap());
+        // Point strings: an escaped name-free value, an empty string, two UTF-8 bytes.
+        let (_, body) = array_text(&xml, "label");
+        let bytes = base64::engine::general_purpose::STANDARD
+            .decode(body.trim())
+            .unwrap();
+        assert_eq!(&bytes[size..], "a<b\0\0é\0".as_bytes());
+        assert!(xml[xml.find("<PointData>").unwrap()..].contains("Name=\"label\""));
+    }
+    let xml = g
+        .to_xml(VtkFormat {
+            encoding: VtkEncoding::Ascii,
+            header: HeaderType::UInt64,
+        })
+        .unwrap();
+    let (tag, body) = array_text(&xml, "kind_name");
+    assert!(tag.contains("format=\"ascii\""), "{tag}");
+    let codes: Vec<u8> = body
+        .split_whitespace()
+        .map(|c| c.parse().unwrap())
+        .collect();
+    assert_eq!(codes, expected);
+    assert_eq!(
+        body.split_whitespace().take(3).collect::<Vec<_>>(),
+        ["115", "116", "114"]
+    );
+    let (_, body) = array_text(&xml, "label");
+    let codes: Vec<u8> = body
+        .split_whitespace()
+        .map(|c| c.parse().unwrap())
+        .collect();
+    assert_eq!(codes, "a<b\0\0é\0".as_bytes());
+}
+
+#[test]
+fn invalid_string_arrays_are_refused() {
+    let mut g = sample();
+    g.cell_strings
+        .push(StringArray::new("kind_name", vec!["x".into(); 5]));
+    let err = g.validate().unwrap_err();
+    assert!(err.contains("`kind_name` has 5 strings"), "{err}");
+    assert!(err.contains("one per cell: 6"), "{err}");
+    g.cell_strings[0].values.push("a\0b".into());
+    let err = g.validate().unwrap_err();
+    assert!(err.contains("string 5 contains a NUL byte"), "{err}");
+    g.cell_strings[0].values[5] = "ok".into();
+    g.validate().unwrap();
+    g.cell_strings[0].name = "k".into();
+    assert!(g.validate().unwrap_err().contains("`k` is used twice"));
 }
 
 #[test]

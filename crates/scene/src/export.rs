@@ -7,7 +7,7 @@ use nurbspring_dnurbs::Geometry;
 use nurbspring_geom::linspace;
 use nurbspring_io::OutputError;
 use nurbspring_io::output::{ObjMesh, write_csv, write_obj};
-use nurbspring_io::vtk::{Cell, DataArray, VtkStructured, VtkUnstructured};
+use nurbspring_io::vtk::{Cell, DataArray, StringArray, VtkStructured, VtkUnstructured};
 use nurbspring_msm::{Class, SpringLattice};
 
 use crate::Error;
@@ -16,7 +16,8 @@ use crate::Error;
 pub const SAMPLES_PER_SPAN: usize = 8;
 
 /// The lattice at positions `x` as an unstructured grid: springs as lines carrying their
-/// class, stiffness, rest length and strain; nodes carrying mass, fixed flag and displacement.
+/// stiffness, rest length, elongation and kind (an integer code `kind` and its name
+/// `kind_name`); nodes carrying mass, fixed flag and displacement.
 pub fn lattice_grid(lattice: &SpringLattice, x: &[f64]) -> VtkUnstructured {
     let points: Vec<[f64; 3]> = x.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
     let mut grid = VtkUnstructured::new(points.clone());
@@ -44,17 +45,24 @@ pub fn lattice_grid(lattice: &SpringLattice, x: &[f64]) -> VtkUnstructured {
             .map(|(s, l)| l - s.rest_length)
             .collect(),
     ));
+    // The spring kind twice: its code (the position in `Class::SPRINGS`, for colouring) and
+    // its name (a VTK string array, for ParaView's spreadsheet and categories).
+    let code = |s: &nurbspring_msm::Spring| {
+        Class::SPRINGS
+            .iter()
+            .position(|c| *c == Class::Spring(s.kind))
+            .unwrap_or(0)
+    };
     grid.cell_data.push(DataArray::scalars(
         "kind",
+        lattice.springs.iter().map(|s| code(s) as f64).collect(),
+    ));
+    grid.cell_strings.push(StringArray::new(
+        "kind_name",
         lattice
             .springs
             .iter()
-            .map(|s| {
-                Class::SPRINGS
-                    .iter()
-                    .position(|c| *c == Class::Spring(s.kind))
-                    .unwrap_or(0) as f64
-            })
+            .map(|s| Class::SPRINGS[code(s)].name().to_string())
             .collect(),
     ));
     grid.point_data
@@ -540,6 +548,48 @@ mod tests {
         for n in &names {
             assert!(docs.contains(n.as_str()), "docs/scenes.md lacks {n}");
         }
+    }
+
+    /// Each spring's `kind_name` is the name of its `kind` code, on a 4 × 4 lattice with all
+    /// three kinds (12 + 12 structural, 2 · 9 shear, 8 + 8 bend springs).
+    #[test]
+    fn lattice_kind_names_match_codes() {
+        use nurbspring_geom::{KnotVector, NurbsSurface};
+        use nurbspring_msm::{Constants, LatticeOptions, ParameterGrid, SpringKind};
+        let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+        let pts = vec![[0., 0., 0.], [0., 1., 0.], [1., 0., 0.], [1., 1., 0.]];
+        let surface = NurbsSurface::try_new(k.clone(), k, pts, vec![1.; 4]).unwrap();
+        let options = LatticeOptions {
+            grid: ParameterGrid::Uniform {
+                nodes_u: 4,
+                nodes_v: 4,
+            },
+            constants: Constants::from_pairs(Class::SPRINGS.map(|c| (c, 1.0))),
+            ..Default::default()
+        };
+        let lattice = SpringLattice::from_surface(&surface, &options, &[]).unwrap();
+        let grid = lattice_grid(&lattice, &lattice.flat_positions());
+        grid.validate().unwrap();
+        let codes = &grid
+            .cell_data
+            .iter()
+            .find(|a| a.name == "kind")
+            .unwrap()
+            .values;
+        let names = &grid.cell_strings[0];
+        assert_eq!(names.name, "kind_name");
+        assert_eq!(names.values.len(), lattice.springs.len());
+        let mut count = [0; 3];
+        for ((s, &c), n) in lattice.springs.iter().zip(codes).zip(&names.values) {
+            let expected = match s.kind {
+                SpringKind::Structural => ("structural", 0.0),
+                SpringKind::Shear => ("shear", 1.0),
+                SpringKind::Bend => ("bend", 2.0),
+            };
+            assert_eq!((n.as_str(), c), expected);
+            count[c as usize] += 1;
+        }
+        assert_eq!(count, [24, 18, 16]);
     }
 
     fn paper_model() -> nurbspring_dnurbs::DnurbsModel {

@@ -168,21 +168,28 @@ fn constants_table(s: &mut String, constants: &nurbspring_msm::Constants) {
 fn validation_table(s: &mut String, rows: &[(&str, &Validation)]) {
     let _ = writeln!(
         s,
-        "| run | MSM run | reference | horizon [s] | rel. RMS (3-D) | rel. RMS (z) | periods D-NURBS / MSM |\n|---|---|---|---|---|---|---|"
+        "| run | MSM run | reference | horizon [s] | rel. RMS (3-D) | rel. RMS (z) | periods D-NURBS / MSM | energy drift D-NURBS / MSM |\n|---|---|---|---|---|---|---|---|"
     );
+    let drift = |d: Option<f64>| d.map_or_else(|| "-".to_string(), |x| format!("{x:.2e}"));
     for (name, v) in rows {
         let _ = writeln!(
             s,
-            "| {name} | {} | {:?} | {:.3} | {:.4} | {:.4} | {} / {} |",
+            "| {name} | {} | {:?} | {:.3} | {:.4} | {:.4} | {} / {} | {} / {} |",
             v.integrator,
             v.reference,
             v.horizon,
             v.relative_rms,
             v.relative_rms_z,
             fmt_period(v.dnurbs_period),
-            fmt_period(v.msm_period)
+            fmt_period(v.msm_period),
+            drift(v.dnurbs_energy_drift),
+            drift(v.msm_energy_drift)
         );
     }
+    let _ = writeln!(
+        s,
+        "\nEnergy drift: the largest change of each model's total energy (kinetic + elastic + load) over the run, relative to its largest kinetic + elastic energy (zero without damping up to the integrator's error; the dissipated share with damping; `energy.png` plots both)."
+    );
 }
 
 /// The paper's sections: the fit readings, the mass scan, the parameters with their
