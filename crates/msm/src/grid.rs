@@ -11,20 +11,20 @@
 //! per node otherwise.
 //!
 //! The pass runs over the rows `i` in increasing order. Row `i` evaluates each spring whose
-//! lower node lies in it once, adds `s d` to the force of the lower node and `−s d` to the
-//! upper one (`d = x_a − x_b`, `s = k (1 − l/|d|)`, paper eq. (5) with the sign of a
-//! stiffness) in a ring of `depth + 1` row buffers, `depth` being the largest row offset. Row
-//! `i` then has every force it will get, so its velocities and positions are updated in place
-//! (`v += Δt M⁻¹ (f_ext − f_int − D v)`, `q += Δt v`) while rows `i + 1 …` still hold the
-//! old positions that the next springs need. The row buffers are structure-of-arrays copies
-//! (fixed nodes filled in), so the spring loops are plain vector loops.
+//! lower node lies in it once, `t = s d` (`d = x_a − x_b`, `s = k (1 − l/|d|)`, paper eq. (5)
+//! with the sign of a stiffness), into a ring of the last `depth + 1` rows of spring forces
+//! per direction, `depth` being the largest row offset. Every spring at a node of row `i` is
+//! then known, so the node's force is summed from the ring (per direction `t` of its spring as
+//! lower node minus `t` of its spring as upper node) and its velocity and position are updated
+//! in place (`v += Δt M⁻¹ (f_ext − f_int − D v)`, `q += Δt v`) while rows `i + 1 …` still hold
+//! the old positions that the next springs need. The position and force rows are
+//! structure-of-arrays copies (fixed nodes filled in), so the loops are plain vector loops.
 //!
 //! In parallel the rows are cut into bands. The old positions of the `depth` rows on each side
 //! of every cut are copied first ("halos"); a band then evaluates the springs that reach into
-//! it from the rows above its first row (adding only to its own rows) and reads the rows below
-//! its last one from the halo. Every node receives its contributions in the same order
-//! whatever the cut, so the result does not depend on the number of bands or threads, bit for
-//! bit. Against the generic path (forces per node, then the update) only the order of the
+//! it from the rows above its first row and reads the rows below its last one from the halo.
+//! Every node receives its contributions in the same order whatever the cut, so the result
+//! does not depend on the number of bands or threads, bit for bit. Against the generic path (forces per node, then the update) only the order of the
 //! force sums differs: the two agree to round-off.
 
 use nurbspring_sim::FusedStep;
@@ -253,10 +253,10 @@ impl GridStep {
         3 * self.n_v
     }
 
-    /// Scratch of one band: `depth + 1` position rows, `depth + 1` force rows, one row of
-    /// spring forces.
+    /// Scratch of one band: `depth + 1` position rows, `depth + 1` rows of spring forces per
+    /// direction, one row of node forces.
     fn band_len(&self) -> usize {
-        (2 * (self.depth + 1) + 1) * self.row_len()
+        (self.depth + 2) * self.row_len() + self.dirs.len() * (self.depth + 1) * self.t_row_len()
     }
 
     /// Halo of one cut: the `depth` rows above it and the `depth` rows below it.
@@ -402,7 +402,8 @@ impl GridStep {
         let row = self.row_len();
         let ring = depth + 1;
         let (xring, rest) = scratch.split_at_mut(ring * row);
-        let (fring, t) = rest.split_at_mut(ring * row);
+        let (tring, frow) = rest.split_at_mut(self.dirs.len() * ring * self.t_row_len());
+        let frow = &mut frow[..row];
         let first = self.row_free[r0];
         // Halo rows: above the band from the cut at r0, below it from the cut at r1.
         let halo_row = |p: usize| -> &[f64] {
@@ -423,24 +424,30 @@ impl GridStep {
                 self.load_row(p, q, first, slot);
             }
         }
-        fring.fill(0.0);
+        // Columns without a spring and the margins stay zero throughout.
+        tring.fill(0.0);
         for p in p0..r1 {
-            for dir in &self.dirs {
+            for (d, dir) in self.dirs.iter().enumerate() {
                 let p_hi = p + dir.di;
-                if p_hi >= self.n_u || p_hi < r0 {
+                if p_hi < r0 {
+                    // Springs of the band above only.
                     continue;
                 }
-                self.spring_row(p, dir, xring, fring, t);
+                let t = self.t_row_mut(tring, d, p);
+                if p_hi >= self.n_u {
+                    t.fill(0.0);
+                } else {
+                    self.spring_row(p, dir, xring, t);
+                }
             }
             if p >= r0 {
-                self.update_row(p, dt, first, q, v, &fring[(p % ring) * row..][..row]);
+                self.row_forces(p, tring, frow);
+                self.update_row(p, dt, first, q, v, frow);
             }
-            // Row p leaves the ring; row p + ring takes its slot.
+            // Row p leaves the position ring; row p + ring takes its slot.
             let next = p + ring;
-            let slot = (p % ring) * row;
-            fring[slot..slot + row].fill(0.0);
             if next < self.n_u && next < r1 + depth {
-                let xs = &mut xring[slot..slot + row];
+                let xs = &mut xring[(p % ring) * row..][..row];
                 if next >= r1 {
                     xs.copy_from_slice(halo_row(next));
                 } else {
@@ -450,75 +457,108 @@ impl GridStep {
         }
     }
 
-    /// The springs of `dir` with their lower node in row `p`: their forces `s d` into `t`,
-    /// then added to the lower nodes and subtracted from the upper ones.
+    /// Length of one row of spring forces: `x`, `y`, `z` of `n_v` springs, each with a margin
+    /// of [`MAX_DJ`] zeros on both sides so that shifted reads stay in bounds.
+    fn t_row_len(&self) -> usize {
+        3 * (self.n_v + 2 * MAX_DJ)
+    }
+
+    /// The spring forces of direction `d` at lower row `p`, in the ring.
+    fn t_row<'a>(&self, tring: &'a [f64], d: usize, p: usize) -> &'a [f64] {
+        let len = self.t_row_len();
+        let ring = self.depth + 1;
+        &tring[(d * ring + p % ring) * len..][..len]
+    }
+
+    fn t_row_mut<'a>(&self, tring: &'a mut [f64], d: usize, p: usize) -> &'a mut [f64] {
+        let len = self.t_row_len();
+        let ring = self.depth + 1;
+        &mut tring[(d * ring + p % ring) * len..][..len]
+    }
+
+    /// The forces `s d` (lower node minus upper node) of the springs of `dir` with their lower
+    /// node in row `p`, into the columns `j_lo .. j_hi` of `t`.
     #[inline]
-    fn spring_row(
-        &self,
-        p: usize,
-        dir: &Direction,
-        xring: &[f64],
-        fring: &mut [f64],
-        t: &mut [f64],
-    ) {
+    fn spring_row(&self, p: usize, dir: &Direction, xring: &[f64], t: &mut [f64]) {
         let n_v = self.n_v;
         let row = self.row_len();
         let ring = self.depth + 1;
         let (lo, hi) = (dir.j_lo, dir.j_hi);
         let len = hi - lo;
-        let shift = |j: usize| (j as isize + dir.dj) as usize;
         let x_lo = &xring[(p % ring) * row..][..row];
         let x_hi = &xring[((p + dir.di) % ring) * row..][..row];
         let rest = &dir.rest[p * n_v + lo..p * n_v + hi];
-        let (tx, rest_t) = t.split_at_mut(n_v);
-        let (ty, tz) = rest_t.split_at_mut(n_v);
-        let (tx, ty, tz) = (&mut tx[..len], &mut ty[..len], &mut tz[..len]);
-        {
-            let (ax, ay, az) = (
-                &x_lo[lo..hi],
-                &x_lo[n_v + lo..n_v + hi],
-                &x_lo[2 * n_v + lo..2 * n_v + hi],
-            );
-            let (h0, h1) = (shift(lo), shift(hi));
-            let (bx, by, bz) = (
-                &x_hi[h0..h1],
-                &x_hi[n_v + h0..n_v + h1],
-                &x_hi[2 * n_v + h0..2 * n_v + h1],
-            );
-            match &dir.k {
-                Stiffness::Uniform(k) => {
-                    let k = *k;
-                    for i in 0..len {
-                        let d = [ax[i] - bx[i], ay[i] - by[i], az[i] - bz[i]];
-                        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                        let s = k * (1.0 - rest[i] / r);
-                        (tx[i], ty[i], tz[i]) = (s * d[0], s * d[1], s * d[2]);
-                    }
+        let w = n_v + 2 * MAX_DJ;
+        let (tx, rest_t) = t.split_at_mut(w);
+        let (ty, tz) = rest_t.split_at_mut(w);
+        let at = MAX_DJ + lo;
+        let (tx, ty, tz) = (
+            &mut tx[at..at + len],
+            &mut ty[at..at + len],
+            &mut tz[at..at + len],
+        );
+        let (ax, ay, az) = (
+            &x_lo[lo..hi],
+            &x_lo[n_v + lo..n_v + hi],
+            &x_lo[2 * n_v + lo..2 * n_v + hi],
+        );
+        let h0 = (lo as isize + dir.dj) as usize;
+        let (bx, by, bz) = (
+            &x_hi[h0..h0 + len],
+            &x_hi[n_v + h0..n_v + h0 + len],
+            &x_hi[2 * n_v + h0..2 * n_v + h0 + len],
+        );
+        match &dir.k {
+            Stiffness::Uniform(k) => {
+                let k = *k;
+                for i in 0..len {
+                    let d = [ax[i] - bx[i], ay[i] - by[i], az[i] - bz[i]];
+                    let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    let s = k * (1.0 - rest[i] / r);
+                    (tx[i], ty[i], tz[i]) = (s * d[0], s * d[1], s * d[2]);
                 }
-                Stiffness::PerSpring(ks) => {
-                    let ks = &ks[p * n_v + lo..p * n_v + hi];
-                    for i in 0..len {
-                        let d = [ax[i] - bx[i], ay[i] - by[i], az[i] - bz[i]];
-                        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                        let s = ks[i] * (1.0 - rest[i] / r);
-                        (tx[i], ty[i], tz[i]) = (s * d[0], s * d[1], s * d[2]);
-                    }
+            }
+            Stiffness::PerSpring(ks) => {
+                let ks = &ks[p * n_v + lo..p * n_v + hi];
+                for i in 0..len {
+                    let d = [ax[i] - bx[i], ay[i] - by[i], az[i] - bz[i]];
+                    let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    let s = ks[i] * (1.0 - rest[i] / r);
+                    (tx[i], ty[i], tz[i]) = (s * d[0], s * d[1], s * d[2]);
                 }
             }
         }
-        let f_lo = (p % ring) * row;
-        for (c, tc) in [&*tx, &*ty, &*tz].into_iter().enumerate() {
-            let f = &mut fring[f_lo + c * n_v + lo..f_lo + c * n_v + hi];
-            for (f, t) in f.iter_mut().zip(tc) {
-                *f += t;
-            }
-        }
-        let f_hi = ((p + dir.di) % ring) * row;
-        let (h0, h1) = (shift(lo), shift(hi));
-        for (c, tc) in [&*tx, &*ty, &*tz].into_iter().enumerate() {
-            let f = &mut fring[f_hi + c * n_v + h0..f_hi + c * n_v + h1];
-            for (f, t) in f.iter_mut().zip(tc) {
-                *f -= t;
+    }
+
+    /// The internal force of every node of row `p` (SoA into `f`): per direction, the force
+    /// of its spring as lower node minus that of its spring as upper node (zero where a node
+    /// has none), directions in their fixed order.
+    #[inline]
+    fn row_forces(&self, p: usize, tring: &[f64], f: &mut [f64]) {
+        let n_v = self.n_v;
+        let w = n_v + 2 * MAX_DJ;
+        f.fill(0.0);
+        for (d, dir) in self.dirs.iter().enumerate() {
+            let lower = self.t_row(tring, d, p);
+            // The spring at upper node (p, j) starts at (p − di, j − dj); none above row 0.
+            let upper = (p >= dir.di).then(|| self.t_row(tring, d, p - dir.di));
+            let shift = (MAX_DJ as isize - dir.dj) as usize;
+            for c in 0..3 {
+                let fc = &mut f[c * n_v..(c + 1) * n_v];
+                let lo = &lower[c * w + MAX_DJ..c * w + MAX_DJ + n_v];
+                match upper {
+                    Some(upper) => {
+                        let up = &upper[c * w + shift..c * w + shift + n_v];
+                        for ((f, l), u) in fc.iter_mut().zip(lo).zip(up) {
+                            *f += l - u;
+                        }
+                    }
+                    None => {
+                        for (f, l) in fc.iter_mut().zip(lo) {
+                            *f += l;
+                        }
+                    }
+                }
             }
         }
     }
