@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every "Mass-spring step" benchmark of docs/benchmarks.md in one session, in release:
-# nurbspring-msm's own bench (memory bandwidth, forces, symplectic-Euler and backward-Euler
-# steps; rayon default pool, then the explicit ones on one thread), then the same
+# nurbspring-msm's own bench (memory bandwidth and triads, forces, the fused and the generic
+# symplectic-Euler step, backward-Euler steps; rayon default pool, then the explicit ones and
+# the triads on one thread), then the same
 # symplectic-Euler step in numpy, Taichi (CPU, f64) and NVIDIA Warp (CPU, f32), each after
 # checking its result against nurbspring's.
 # Needs a Python venv (PYTHON, default /tmp/peers2/bin/python):
@@ -20,7 +21,7 @@ echo "== nurbspring-msm (crates/msm/benches/step.rs), rayon default pool"
 cargo bench -p nurbspring-msm --bench step
 echo "== the same, one thread (RAYON_NUM_THREADS=1), explicit step only"
 RAYON_NUM_THREADS=1 cargo bench -p nurbspring-msm --bench step -- \
-  --save-baseline one-thread "internal_force|symplectic"
+  --save-baseline one-thread "triad|internal_force|symplectic"
 cd bench-peers
 for peer in numpy taichi warp; do
   echo "== $peer (bench-peers/msm_step_$peer.py)"

@@ -1,12 +1,19 @@
 #![allow(missing_docs)]
 //! Benchmarks of the mass-spring model (run: `cargo bench -p nurbspring-msm --bench step`).
 //!
-//! - `memory/*`: the machine's memory bandwidth (a 256 MiB f64 copy and sum), so that the
-//!   figures below can be set against it;
+//! - `memory/*`: the machine's memory bandwidth (a 256 MiB f64 copy and sum on one thread; the
+//!   STREAM triad `a = b + s c` on the rayon pool, over 3 × 128 MiB, far beyond the caches, and
+//!   over 3 × 3 MiB, about the data of the step below), so that the figures below can be set
+//!   against it;
 //! - `msm/internal_force/256x256`: the spring forces of paper eq. (5) on a 256 × 256 lattice
 //!   with structural and shear springs (≈ 261k springs), f64;
 //! - `msm/symplectic_euler_step/256x256`: one step of `nurbspring-sim`'s symplectic Euler on
-//!   that lattice (forces, gravity and the update of q and v);
+//!   that lattice, the model's fused step (forces, gravity and the update of q and v in one
+//!   pass); its throughput is in bytes, those of `MsmModel::fused_step_traffic` (positions
+//!   and velocities read and written once, one rest length per spring), so criterion's GB/s
+//!   is the achieved bandwidth to set against the triad;
+//! - `msm/symplectic_euler_step_generic/256x256`: the same step by the generic path (the
+//!   model's fused step hidden: forces per node, then the update), for comparison;
 //! - `msm/backward_euler_step/128x128`: one backward-Euler step (Newton on the sparse tangent
 //!   stiffness) on a 128 × 128 lattice.
 //!
@@ -18,13 +25,56 @@ use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_linalg::SparseMatrix;
 use nurbspring_msm::{
     Class, Constants, FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringKind,
     SpringLattice,
 };
 use nurbspring_sim::{
-    DynamicModel, IntegratorKind, RunOptions, State, make_stepper, make_stepper_with_options,
+    DynamicModel, IntegratorKind, RunOptions, State, SystemMatrix, make_stepper,
+    make_stepper_with_options,
 };
+use rayon::prelude::*;
+
+/// The model with its fused step hidden, so that `nurbspring-sim` takes the generic path.
+struct Generic<'a>(&'a MsmModel);
+
+impl DynamicModel for Generic<'_> {
+    fn n_dofs(&self) -> usize {
+        self.0.n_dofs()
+    }
+    fn mass(&self) -> &SystemMatrix {
+        self.0.mass()
+    }
+    fn damping(&self) -> Option<&SystemMatrix> {
+        self.0.damping()
+    }
+    fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+        self.0.internal_force(q, out)
+    }
+    fn external_force(&self, t: f64, out: &mut [f64]) {
+        self.0.external_force(t, out)
+    }
+    fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+        self.0.tangent_stiffness(q)
+    }
+    fn potential_energy(&self, q: &[f64]) -> f64 {
+        self.0.potential_energy(q)
+    }
+}
+
+/// STREAM triad `a = b + s c` over chunks of the rayon pool.
+fn triad(a: &mut [f64], b: &[f64], c: &[f64], s: f64) {
+    const CHUNK: usize = 1 << 15;
+    a.par_chunks_mut(CHUNK)
+        .zip(b.par_chunks(CHUNK))
+        .zip(c.par_chunks(CHUNK))
+        .for_each(|((a, b), c)| {
+            for ((a, b), c) in a.iter_mut().zip(b).zip(c) {
+                *a = b + s * c;
+            }
+        });
+}
 
 /// A gently curved bilinear sheet, `n × n` nodes, spacing ≈ 1 / (n − 1), structural + shear
 /// springs, the two corners of the `v = 0` edge fixed, gravity on.
@@ -77,14 +127,29 @@ fn memory(c: &mut Criterion) {
     group.bench_function("sum_256MiB", |b| {
         b.iter(|| black_box(black_box(&src).iter().sum::<f64>()))
     });
+    drop((src, dst));
+    for (name, len) in [("triad_3x128MiB", 16 << 20), ("triad_3x3MiB", 3 << 17)] {
+        let (b_in, c_in) = (vec![1.0; len], vec![2.0; len]);
+        let mut a_out = vec![0.0; len];
+        group.throughput(Throughput::Bytes((3 * len * 8) as u64));
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                triad(&mut a_out, black_box(&b_in), black_box(&c_in), 3.0);
+                black_box(&a_out);
+            })
+        });
+    }
     group.finish();
 }
 
 fn explicit(c: &mut Criterion) {
     let model = sheet(256);
     let springs = model.lattice().springs.len();
+    let traffic = model
+        .fused_step_traffic()
+        .expect("the sheet is a grid lattice");
     eprintln!(
-        "256 x 256 lattice: {springs} springs, {} free dofs",
+        "256 x 256 lattice: {springs} springs, {} free dofs; the fused step moves {traffic} bytes at least",
         model.n_dofs()
     );
     let state = perturbed_state(&model);
@@ -98,8 +163,15 @@ fn explicit(c: &mut Criterion) {
         b.iter(|| model.internal_force(black_box(&state.q), &mut out))
     });
     let dt = 1e-5;
+    let generic = Generic(&model);
+    let mut stepper = make_stepper(IntegratorKind::SymplecticEuler, &generic, &state, dt).unwrap();
+    let mut s = state.clone();
+    group.bench_function("symplectic_euler_step_generic/256x256", |b| {
+        b.iter(|| stepper.step(&generic, &mut s, dt).unwrap())
+    });
     let mut stepper = make_stepper(IntegratorKind::SymplecticEuler, &model, &state, dt).unwrap();
     let mut s = state.clone();
+    group.throughput(Throughput::Bytes(traffic as u64));
     group.bench_function("symplectic_euler_step/256x256", |b| {
         b.iter(|| stepper.step(&model, &mut s, dt).unwrap())
     });

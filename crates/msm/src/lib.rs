@@ -54,13 +54,15 @@
 //! Layout: [`SpringLattice`] (builders, forces, stiffness on all `3N` coordinates),
 //! [`MsmFile`] (`msm.json`), [`Constants`] by [`Class`], [`MsmModel`] (the free coordinates, for `nurbspring-sim`).
 //! The force kernel sums per node over a node-to-spring incidence (CSR), in parallel and
-//! without allocation; the tangent stiffness is filled per node into a block pattern computed
+//! without allocation; on grid lattices the symplectic-Euler step is one fused pass over the
+//! rows with the topology implicit in the grid; the tangent stiffness is filled per node into a block pattern computed
 //! once.
 
 mod constants;
 mod element;
 mod error;
 mod file;
+mod grid;
 mod lattice;
 mod model;
 mod spring;

@@ -14,9 +14,11 @@ use std::sync::OnceLock;
 
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::{
-    DofMap, DynamicModel, IntegratorKind, StabilityLimit, State, SystemMatrix, stability_limit,
+    DofMap, DynamicModel, FusedStep, IntegratorKind, StabilityLimit, State, SystemMatrix,
+    stability_limit,
 };
 
+use crate::grid::GridStep;
 use crate::stiffness::{Coefficient, TangentPattern};
 use crate::topology::Topology;
 use crate::{Class, MsmError, SpringLattice};
@@ -39,6 +41,8 @@ pub struct MsmModel {
     q0: Vec<f64>,
     /// `L_ff ⊗ I₃` of the linear elements on the free coordinates (`None` without elements).
     linear: Option<SparseMatrix>,
+    /// The fused symplectic-Euler step of a grid lattice (`None`: the generic path).
+    grid_step: Option<GridStep>,
 }
 
 impl MsmModel {
@@ -68,7 +72,9 @@ impl MsmModel {
     }
 
     /// Validates the lattice ([`SpringLattice::validate`]) and precomputes the node-to-spring
-    /// incidence of the free nodes. The tangent pattern is built on first use.
+    /// incidence of the free nodes and, for a grid lattice, the data of its fused
+    /// symplectic-Euler step ([`DynamicModel::fused_step`]). The tangent pattern is built on
+    /// first use.
     pub fn new(lattice: SpringLattice) -> Result<Self, MsmError> {
         lattice.validate()?;
         let dof_map = DofMap::new(lattice.n_dofs(), &lattice.fixed_dofs())?;
@@ -91,6 +97,7 @@ impl MsmModel {
             let l = lattice.linear_matrix(None);
             l.submatrix(free_nodes, free_nodes).kron_identity(3)
         });
+        let grid_step = GridStep::new(&lattice, &external);
         Ok(Self {
             lattice,
             dof_map,
@@ -102,6 +109,7 @@ impl MsmModel {
             x0,
             q0,
             linear,
+            grid_step,
         })
     }
 
@@ -186,6 +194,15 @@ impl MsmModel {
         }
     }
 
+    /// Bytes one fused symplectic-Euler step must read and write at least, `None` when the model
+    /// has no fused step: the positions and velocities of the free nodes read and written once,
+    /// one rest length per spring (and its stiffness where the springs of a direction do not
+    /// share one), the per-node mass, damping and external force where they vary. The step's
+    /// time against this count is its achieved bandwidth.
+    pub fn fused_step_traffic(&self) -> Option<usize> {
+        self.grid_step.as_ref().map(GridStep::traffic_bytes)
+    }
+
     /// True when the model has no springs: its force is linear, `f_int = (L_ff ⊗ I₃)(q − q₀)`.
     pub fn is_linear(&self) -> bool {
         self.lattice.springs.is_empty()
@@ -215,6 +232,7 @@ impl std::fmt::Debug for MsmModel {
             .field("free_nodes", &self.topology.n_active())
             .field("springs", &self.lattice.springs.len())
             .field("damped", &self.damping.is_some())
+            .field("fused_step", &self.grid_step.is_some())
             .finish()
     }
 }
@@ -286,6 +304,16 @@ impl DynamicModel for MsmModel {
                 springs + 0.5 * l.quadratic_form(&u)
             }
         }
+    }
+
+    /// On a grid lattice without linear elements whose springs join `(i, j)` to
+    /// `(i + di, j + dj)`, `di ≤ 2`, `|dj| ≤ 2`, each offset on every node that has the
+    /// partner (the lattices built from surfaces): one pass that evaluates every spring once
+    /// and updates velocities and positions row by row (crates/msm/src/grid.rs). Its result
+    /// is the generic path's up to the order of the force sums, and the same on any number of
+    /// threads.
+    fn fused_step(&self) -> Option<&dyn FusedStep> {
+        self.grid_step.as_ref().map(|g| g as &dyn FusedStep)
     }
 
     /// `−(q − q_0)ᵀ f_ext`: the potential of the constant gravity load, zero at the initial

@@ -120,6 +120,35 @@ pub trait DynamicModel: Sync {
     fn external_potential(&self, _t: f64, _q: &[f64]) -> f64 {
         0.0
     }
+    /// The model's own symplectic-Euler step, when it has one that is faster than the generic
+    /// path (forces through [`DynamicModel::internal_force`], then the update): the
+    /// [`crate::integrators::SymplecticEuler`] stepper calls it instead. `None` (the default)
+    /// means the generic path.
+    fn fused_step(&self) -> Option<&dyn FusedStep> {
+        None
+    }
+}
+
+/// A symplectic-Euler step fused into one pass over a model's data (spring forces, velocity
+/// and position update together), offered by [`DynamicModel::fused_step`].
+///
+/// It must compute what the generic path computes, `v⁺ = v + Δt M⁻¹ (f_ext(t) − f_int(q) −
+/// D v)` and `q⁺ = q + Δt v⁺` on the free dofs, up to the order of floating-point sums.
+pub trait FusedStep: Sync {
+    /// Length of the `f64` workspace [`FusedStep::symplectic_euler`] needs (allocated once by
+    /// the stepper).
+    fn workspace_len(&self) -> usize;
+    /// Advances `(q, v)` at time `t` by one symplectic-Euler step of `dt`, in place.
+    /// `workspace` has at least [`FusedStep::workspace_len`] entries; its contents on entry do
+    /// not matter.
+    fn symplectic_euler(
+        &self,
+        t: f64,
+        dt: f64,
+        q: &mut [f64],
+        v: &mut [f64],
+        workspace: &mut [f64],
+    );
 }
 
 /// A linear model on free dofs: constant M, D, K, `f_int(q) = K (q − rest)`, constant

@@ -35,7 +35,9 @@ fn acceleration(
 
 /// Symplectic (semi-implicit) Euler: `v⁺ = v + Δt M⁻¹(f_ext(t) − f_int(q) − D v)`, then
 /// `q⁺ = q + Δt v⁺`. First order; symplectic, so without damping the energy error stays
-/// bounded (no drift); stable for `Δt < 2/ω_max`.
+/// bounded (no drift); stable for `Δt < 2/ω_max`. A model with a fused step
+/// ([`DynamicModel::fused_step`]) runs its own; otherwise the forces come first and the update
+/// is one pass over the dofs.
 pub struct SymplecticEuler {
     inv_m: Vec<f64>,
     /// Diagonal damping, when the model's damping is diagonal (then the update is one fused
@@ -43,6 +45,8 @@ pub struct SymplecticEuler {
     damping_diag: Option<Vec<f64>>,
     a: Vec<f64>,
     fint: Vec<f64>,
+    /// Workspace of the model's fused step ([`DynamicModel::fused_step`]), when it has one.
+    fused: Vec<f64>,
 }
 
 /// Dofs per parallel chunk of the fused update (below two chunks the update runs serially).
@@ -57,11 +61,13 @@ impl SymplecticEuler {
             None => Some(vec![0.0; n]),
             Some(d) => d.as_diagonal(),
         };
+        let fused = vec![0.0; model.fused_step().map_or(0, |f| f.workspace_len())];
         Ok(Self {
             inv_m,
             damping_diag,
             a: vec![0.0; n],
             fint: vec![0.0; n],
+            fused,
         })
     }
 }
@@ -73,6 +79,16 @@ impl super::Stepper for SymplecticEuler {
         state: &mut State,
         dt: f64,
     ) -> Result<(), SimError> {
+        if let Some(fused) = model.fused_step() {
+            let len = fused.workspace_len();
+            if self.fused.len() < len {
+                // Only when called with another model than the one it was built for.
+                self.fused.resize(len, 0.0);
+            }
+            fused.symplectic_euler(state.t, dt, &mut state.q, &mut state.v, &mut self.fused);
+            state.t += dt;
+            return Ok(());
+        }
         let Some(d) = &self.damping_diag else {
             acceleration(
                 model,

@@ -1,0 +1,111 @@
+//! Times the symplectic-Euler step of the "Mass-spring step" benchmark (docs/benchmarks.md)
+//! with the statistic of `bench-peers/msm_step_warp.py`: median and minimum of 40 blocks of 20
+//! steps after 50 warm-up steps, for the model's fused step and for the generic path. On a
+//! shared machine the minimum is the least disturbed figure, and the same statistic on both
+//! sides keeps the ratio to the peer fair. The criterion bench (`benches/step.rs`) remains the
+//! reference measurement.
+//!
+//! Run: `cargo run --release -p nurbspring-msm --example step_blocks` (threads:
+//! `RAYON_NUM_THREADS`).
+
+use std::time::Instant;
+
+use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_linalg::SparseMatrix;
+use nurbspring_msm::{
+    Class, Constants, FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringKind,
+    SpringLattice,
+};
+use nurbspring_sim::{DynamicModel, IntegratorKind, SystemMatrix, make_stepper};
+
+/// The model with its fused step hidden, so that `nurbspring-sim` takes the generic path.
+struct Generic<'a>(&'a MsmModel);
+
+impl DynamicModel for Generic<'_> {
+    fn n_dofs(&self) -> usize {
+        self.0.n_dofs()
+    }
+    fn mass(&self) -> &SystemMatrix {
+        self.0.mass()
+    }
+    fn damping(&self) -> Option<&SystemMatrix> {
+        self.0.damping()
+    }
+    fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+        self.0.internal_force(q, out)
+    }
+    fn external_force(&self, t: f64, out: &mut [f64]) {
+        self.0.external_force(t, out)
+    }
+    fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+        self.0.tangent_stiffness(q)
+    }
+    fn potential_energy(&self, q: &[f64]) -> f64 {
+        self.0.potential_energy(q)
+    }
+}
+
+/// `sheet(256)` of `benches/step.rs`.
+fn sheet(n: usize) -> MsmModel {
+    let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+    let pts = vec![[0., 0., 0.], [0., 1., 0.1], [1., 0., 0.1], [1., 1., 0.]];
+    let surface = NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 4]).unwrap();
+    let options = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: n,
+            nodes_v: n,
+        },
+        constants: Constants::from_pairs([
+            (Class::Spring(SpringKind::Structural), 1000.0),
+            (Class::Spring(SpringKind::Shear), 500.0),
+        ]),
+        mass: 1.0 / (n * n) as f64,
+        fixed: FixedNodes::List(vec![0, (n - 1) * n]),
+        gravity: [0.0, 0.0, -9.81],
+        ..Default::default()
+    };
+    MsmModel::new(SpringLattice::from_surface(&surface, &options, &[]).unwrap()).unwrap()
+}
+
+fn main() {
+    let model = sheet(256);
+    let mut state = model.initial_state(&[]);
+    for (i, q) in state.q.iter_mut().enumerate() {
+        *q += 1e-4 * ((i as f64) * 0.7).sin();
+    }
+    let dt = 1e-5;
+    let generic = Generic(&model);
+    println!(
+        "256 x 256 lattice, {} springs, {} rayon threads; load average {}",
+        model.lattice().springs.len(),
+        rayon::current_num_threads(),
+        std::fs::read_to_string("/proc/loadavg")
+            .unwrap_or_default()
+            .trim()
+    );
+    for (name, m) in [
+        ("fused", &model as &dyn DynamicModel),
+        ("generic", &generic as &dyn DynamicModel),
+    ] {
+        let mut s = state.clone();
+        let mut stepper = make_stepper(IntegratorKind::SymplecticEuler, m, &s, dt).unwrap();
+        for _ in 0..50 {
+            stepper.step(m, &mut s, dt).unwrap();
+        }
+        let mut times: Vec<f64> = (0..40)
+            .map(|_| {
+                let t0 = Instant::now();
+                for _ in 0..20 {
+                    stepper.step(m, &mut s, dt).unwrap();
+                }
+                t0.elapsed().as_secs_f64() / 20.0
+            })
+            .collect();
+        times.sort_by(f64::total_cmp);
+        println!(
+            "{name} step: median {:.3} ms, min {:.3} ms (40 blocks of 20 steps)",
+            times[20] * 1e3,
+            times[0] * 1e3
+        );
+    }
+}
