@@ -6,7 +6,9 @@
 //! formed sparse (never a dense `3N × 3N` product). The paper solved (15) with a trust-region
 //! method; [`StiffnessFit::trust_region`] does the same and must land on the closed form.
 
-use nurbspring_linalg::{DenseMatrix, SparseMatrix, nonnegative_least_squares, symmetric_eigen};
+use nurbspring_linalg::{
+    DenseMatrix, SparseMatrix, nonnegative_least_squares, symmetric_eigen, symmetric_eigenvalues,
+};
 use nurbspring_msm::{Class, Constants};
 use serde::{Deserialize, Serialize};
 
@@ -52,6 +54,9 @@ pub struct StiffnessFit {
     gram: DenseMatrix,
     rhs: Vec<f64>,
     k_d_norm: f64,
+    /// `‖K_D‖₂`, computed on first use (the spectral fit evaluates its residual hundreds of
+    /// times).
+    k_d_spectral_norm: std::sync::OnceLock<f64>,
 }
 
 /// Outcome of the trust-region iteration.
@@ -126,6 +131,7 @@ impl StiffnessFit {
             gram,
             rhs,
             k_d_norm,
+            k_d_spectral_norm: std::sync::OnceLock::new(),
         };
         fit.check_identifiable()?;
         Ok(fit)
@@ -353,7 +359,15 @@ impl StiffnessFit {
     /// symmetric residual), the other reading of the paper's `‖·‖₂²` in eq. (15).
     pub fn relative_spectral_residual(&self, k: &[f64]) -> Result<f64, DeriveError> {
         let diff = SparseMatrix::linear_combination(1.0, &self.model_matrix(k)?, -1.0, &self.k_d)?;
-        Ok(spectral_norm(&diff)? / spectral_norm(&self.k_d)?.max(f64::MIN_POSITIVE))
+        let k_d_norm = match self.k_d_spectral_norm.get() {
+            Some(&n) => n,
+            None => {
+                let n = spectral_norm(&self.k_d)?;
+                let _ = self.k_d_spectral_norm.set(n);
+                n
+            }
+        };
+        Ok(spectral_norm(&diff)? / k_d_norm.max(f64::MIN_POSITIVE))
     }
 
     /// Minimizes the spectral-norm residual (convex but not smooth) by Nelder–Mead from the
@@ -378,10 +392,10 @@ impl StiffnessFit {
     }
 }
 
-/// Largest |eigenvalue| of a symmetric sparse matrix (dense eigen-decomposition).
+/// Largest |eigenvalue| of a symmetric sparse matrix (dense eigenvalues).
 fn spectral_norm(a: &SparseMatrix) -> Result<f64, DeriveError> {
-    let eig = symmetric_eigen(&a.to_dense())?;
-    Ok(eig.values.iter().map(|x| x.abs()).fold(0.0, f64::max))
+    let values = symmetric_eigenvalues(&a.to_dense())?;
+    Ok(values.iter().map(|x| x.abs()).fold(0.0, f64::max))
 }
 
 /// Nelder–Mead simplex minimization (Lagarias et al. 1998 coefficients) from `x0` with an

@@ -224,6 +224,8 @@ pub fn mass_step(
 
 /// The candidate loop: simulates the MSM with `m = λ` for each candidate. Each run uses the
 /// scene's integrator when it is stable at Δt, Newmark otherwise (recorded per candidate).
+/// The candidates are independent, so they run in parallel (rayon's pool; the results do not
+/// depend on the order); `progress` is called on the calling thread as runs finish.
 fn mass_candidates(
     setup: &Setup,
     config: &Config,
@@ -233,9 +235,9 @@ fn mass_candidates(
     cancel: Option<Arc<AtomicBool>>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<MassCandidate>, DeriveError> {
+    use rayon::prelude::*;
     let z_ref = dnurbs.component(0, 2);
-    let mut out = Vec::with_capacity(masses.len());
-    for (i, &m) in masses.iter().enumerate() {
+    let run = |m: f64| -> Result<MassCandidate, DeriveError> {
         if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
             return Err(DeriveError::Cancelled);
         }
@@ -251,16 +253,35 @@ fn mass_candidates(
         )?;
         let c = compare(&dnurbs.t, &z_ref, &traj.component(0, 2));
         let complete = traj.stopped.is_none() && c.samples == z_ref.len();
-        out.push(MassCandidate {
+        Ok(MassCandidate {
             m,
             rms: if complete { c.rms } else { f64::INFINITY },
             max_abs: if complete { c.max_abs } else { f64::INFINITY },
             integrator,
             stopped: traj.stopped.clone(),
+        })
+    };
+    let (done_tx, done_rx) = std::sync::mpsc::channel::<()>();
+    std::thread::scope(|scope| {
+        let worker = scope.spawn(move || {
+            masses
+                .par_iter()
+                .map(|&m| {
+                    let candidate = run(m);
+                    // The receiver outlives the worker unless the caller panicked.
+                    let _ = done_tx.send(());
+                    candidate
+                })
+                .collect::<Result<Vec<_>, _>>()
         });
-        progress(i + 1, masses.len());
-    }
-    Ok(out)
+        // The channel closes when the worker's sender is dropped, that is when it returns.
+        for (k, ()) in done_rx.iter().enumerate() {
+            progress(k + 1, masses.len());
+        }
+        worker
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
 }
 
 /// The D-NURBS watched at the probes over the validation horizon: the exact modal solution

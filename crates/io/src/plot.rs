@@ -319,20 +319,24 @@ pub const SUPERSAMPLE: u32 = 3;
 fn box_downsample(big: &[u8], w: u32, h: u32, k: u32) -> Vec<u8> {
     let (w, h, k) = (w as usize, h as usize, k as usize);
     let stride = w * k * 3;
-    let mut out = vec![0u8; w * h * 3];
     let n = (k * k) as u32;
-    for y in 0..h {
-        for x in 0..w {
-            for c in 0..3 {
-                let mut sum = 0u32;
-                for dy in 0..k {
-                    let row = (y * k + dy) * stride;
-                    for dx in 0..k {
-                        sum += u32::from(big[row + (x * k + dx) * 3 + c]);
-                    }
+    let mut out = vec![0u8; w * h * 3];
+    // Row sums of one output row: the k input rows added pixel block by pixel block, in
+    // memory order.
+    let mut sums = vec![0u32; w * 3];
+    for (y, out_row) in out.chunks_exact_mut(w * 3).enumerate() {
+        sums.fill(0);
+        for row in big[y * k * stride..(y + 1) * k * stride].chunks_exact(stride) {
+            for (sum, block) in sums.chunks_exact_mut(3).zip(row.chunks_exact(3 * k)) {
+                for px in block.chunks_exact(3) {
+                    sum[0] += u32::from(px[0]);
+                    sum[1] += u32::from(px[1]);
+                    sum[2] += u32::from(px[2]);
                 }
-                out[(y * w + x) * 3 + c] = ((sum + n / 2) / n) as u8;
             }
+        }
+        for (o, &s) in out_row.iter_mut().zip(&sums) {
+            *o = ((s + n / 2) / n) as u8;
         }
     }
     out

@@ -89,6 +89,27 @@ pub fn symmetric_eigen(a: &DenseMatrix) -> Result<SymmetricEigen, LinalgError> {
     Ok(SymmetricEigen { values, vectors })
 }
 
+/// The eigenvalues of a dense symmetric A, ascending (the symmetric part `(A + Aᵀ)/2` is used),
+/// without the eigenvectors: the same values as [`symmetric_eigen`] at a fraction of the cost.
+///
+/// ```
+/// use nurbspring_linalg::{symmetric_eigenvalues, DenseMatrix};
+/// let a = DenseMatrix::from_row_major(2, 2, vec![2.0, 1.0, 1.0, 2.0]);
+/// let v = symmetric_eigenvalues(&a).unwrap();
+/// assert!((v[0] - 1.0).abs() < 1e-14 && (v[1] - 3.0).abs() < 1e-14);
+/// ```
+pub fn symmetric_eigenvalues(a: &DenseMatrix) -> Result<Vec<f64>, LinalgError> {
+    check_dense_square("symmetric_eigenvalues", a)?;
+    if a.nrows() == 0 {
+        return Ok(Vec::new());
+    }
+    let mut values = symmetric_part(a)
+        .self_adjoint_eigenvalues(Side::Lower)
+        .map_err(|e| LinalgError::Faer(format!("symmetric_eigenvalues: {e:?}")))?;
+    values.sort_by(f64::total_cmp);
+    Ok(values)
+}
+
 /// `K φ = λ M φ` with K symmetric and M symmetric positive definite, by Cholesky reduction:
 /// `M = L Lᵀ`, `C = L⁻¹ K L⁻ᵀ = Y Λ Yᵀ`, `φ = L⁻ᵀ Y` (Golub & Van Loan §8.7.2). Eigenvalues
 /// ascending; eigenvectors M-orthonormal (`ΦᵀMΦ = I`).

@@ -46,9 +46,9 @@ pub use assembly::AssemblyPattern;
 pub use dense::DenseMatrix;
 pub use eigen::{
     SymmetricEigen, generalized_eigen_sparse_lowest, generalized_symmetric_eigen,
-    largest_generalized_eigenvalue, symmetric_eigen,
+    largest_generalized_eigenvalue, symmetric_eigen, symmetric_eigenvalues,
 };
 pub use error::LinalgError;
 pub use lstsq::{affine_solution_space, least_squares, nonnegative_least_squares};
 pub use solvers::{LuSolver, SpdSolver, cholesky_solve_dense, solve_dense};
-pub use sparse::SparseMatrix;
+pub use sparse::{ShiftedSum, SparseMatrix};

@@ -3,6 +3,101 @@
 use crate::error::mismatch;
 use crate::{AssemblyPattern, DenseMatrix, LinalgError};
 
+/// `S = A + βB` kept on one pattern and refilled in place: for a fixed `A` and a sequence of
+/// `B`s with one pattern (a tangent stiffness along a Newton iteration), the union pattern and
+/// the position in `S` of each entry of `A` and `B` are found once; [`ShiftedSum::update`] then
+/// costs one pass over `S` and one over `B`, with no allocation. A `B` with another pattern
+/// rebuilds the plan. The values equal [`SparseMatrix::linear_combination`]`(1, A, β, B)` to the
+/// last bit (`a + βb` where both store an entry).
+///
+/// ```
+/// use nurbspring_linalg::{ShiftedSum, SparseMatrix};
+/// let a = SparseMatrix::from_diagonal(&[1.0, 2.0]);
+/// let b = SparseMatrix::from_triplets(2, 2, &[(0, 1, 1.0), (1, 0, 1.0), (1, 1, 1.0)]).unwrap();
+/// let mut s = ShiftedSum::new(&a, 0.5, &b).unwrap();
+/// assert_eq!(s.matrix().get(1, 1), 2.5);
+/// assert_eq!(s.update(2.0, &b).unwrap().get(0, 1), 2.0);
+/// ```
+#[derive(Clone, Debug)]
+pub struct ShiftedSum {
+    a: SparseMatrix,
+    sum: SparseMatrix,
+    /// `A`'s values scattered onto the pattern of `S` (zero elsewhere).
+    base: Vec<f64>,
+    /// The pattern of the `B` the plan was made for.
+    b_col_ptr: Vec<usize>,
+    b_row_idx: Vec<usize>,
+    /// Position in `S` of each stored entry of `B`.
+    b_map: Vec<usize>,
+}
+
+impl ShiftedSum {
+    /// The plan and the first sum `A + βB`.
+    pub fn new(a: &SparseMatrix, beta: f64, b: &SparseMatrix) -> Result<Self, LinalgError> {
+        let mut s = Self {
+            a: a.clone(),
+            sum: SparseMatrix::zeros(a.nrows, a.ncols),
+            base: Vec::new(),
+            b_col_ptr: Vec::new(),
+            b_row_idx: Vec::new(),
+            b_map: Vec::new(),
+        };
+        s.plan(b)?;
+        s.update(beta, b)?;
+        Ok(s)
+    }
+
+    fn plan(&mut self, b: &SparseMatrix) -> Result<(), LinalgError> {
+        let mut sum = SparseMatrix::linear_combination(1.0, &self.a, 0.0, b)?;
+        let mut base = vec![0.0; sum.nnz()];
+        for j in 0..self.a.ncols {
+            for p in self.a.col_ptr[j]..self.a.col_ptr[j + 1] {
+                let at = sum
+                    .position(self.a.row_idx[p], j)
+                    .expect("the union pattern holds every entry of A");
+                base[at] = self.a.values[p];
+            }
+        }
+        self.b_map = (0..b.ncols)
+            .flat_map(|j| (b.col_ptr[j]..b.col_ptr[j + 1]).map(move |p| (b.row_idx[p], j)))
+            .map(|(i, j)| {
+                sum.position(i, j)
+                    .expect("the union pattern holds every entry of B")
+            })
+            .collect();
+        sum.values.copy_from_slice(&base);
+        self.sum = sum;
+        self.base = base;
+        self.b_col_ptr = b.col_ptr.clone();
+        self.b_row_idx = b.row_idx.clone();
+        Ok(())
+    }
+
+    /// Refills `S = A + βB` in place (a new plan when `B`'s pattern is not the planned one).
+    pub fn update(&mut self, beta: f64, b: &SparseMatrix) -> Result<&SparseMatrix, LinalgError> {
+        if b.nrows != self.a.nrows || b.ncols != self.a.ncols {
+            return Err(mismatch(
+                "ShiftedSum::update",
+                format!("{}×{}", self.a.nrows, self.a.ncols),
+                format!("{}×{}", b.nrows, b.ncols),
+            ));
+        }
+        if b.col_ptr != self.b_col_ptr || b.row_idx != self.b_row_idx {
+            self.plan(b)?;
+        }
+        self.sum.values.copy_from_slice(&self.base);
+        for (&at, &v) in self.b_map.iter().zip(&b.values) {
+            self.sum.values[at] += beta * v;
+        }
+        Ok(&self.sum)
+    }
+
+    /// The current sum.
+    pub fn matrix(&self) -> &SparseMatrix {
+        &self.sum
+    }
+}
+
 /// Compressed sparse column (CSC) matrix of `f64`.
 ///
 /// Column `j` holds the entries `row_idx[col_ptr[j]..col_ptr[j + 1]]` (strictly increasing, no

@@ -41,6 +41,13 @@ impl BackwardEuler {
     }
 }
 
+impl BackwardEuler {
+    /// How many Newton matrices were factored and Newton iterations run so far.
+    pub fn newton_counts(&self) -> super::NewtonCounts {
+        self.core.counts
+    }
+}
+
 impl super::Stepper for BackwardEuler {
     fn step(
         &mut self,

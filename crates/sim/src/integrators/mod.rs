@@ -27,6 +27,7 @@ mod terzopoulos_qin;
 
 pub use backward_euler::BackwardEuler;
 pub use explicit::{Rk4, SymplecticEuler, VelocityVerlet};
+pub use implicit::NewtonCounts;
 pub use modal::Modal;
 pub use newmark::Newmark;
 pub use terzopoulos_qin::TerzopoulosQin;

@@ -75,6 +75,13 @@ impl Newmark {
     }
 }
 
+impl Newmark {
+    /// How many Newton matrices were factored and Newton iterations run so far.
+    pub fn newton_counts(&self) -> super::NewtonCounts {
+        self.core.counts
+    }
+}
+
 impl super::Stepper for Newmark {
     fn step(
         &mut self,
