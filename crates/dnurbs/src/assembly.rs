@@ -1,13 +1,15 @@
 //! Assembly of the D-NURBS matrices `M`, `D`, `K` and the load vector `f_p` by Gauss–Legendre
 //! quadrature over the non-empty knot spans (paper eqs. (3)–(4), docs/math.md §3).
 //!
-//! The sparsity pattern is computed once per discretization through
-//! [`AssemblyPattern`]: every element (knot span pair) owns a contiguous slice of the value
-//! vector holding its dense local block, the element kernels fill those slices in parallel with
-//! rayon (no locks: each element writes only its own slice), and `AssemblyPattern::assemble`
-//! sums duplicates into CSC. With constant weights the kernels work on the scalar `N × N`
-//! matrices `S` and the dof matrices are `S ⊗ I_3` (interleaved ordering, docs/math.md §1); with weights
-//! as unknowns the kernels fill full `4N × 4N` blocks through the Jacobian with weight columns.
+//! The sparsity pattern is written once per discretization from the knot spans
+//! ([`TensorLayout`], a [`KroneckerPattern`] `A_u ⊗ A_v ⊗ 1_{m×m}`: no sort, arithmetic
+//! positions). Element blocks are summed into the CSC values in place; element rows (one `u`
+//! span, every `v` span) `p + 1` spans apart touch disjoint columns and run in parallel with
+//! rayon, without locks. With constant weights the kernels work on the scalar `N × N` matrices
+//! `S` and the dof matrices are `S ⊗ I_3` (interleaved ordering, docs/math.md §1); a B-spline
+//! integrated over the parameter domain takes the exact Kronecker form `S = Σ c_t G_u ⊗ G_v` of
+//! 1-D Gram matrices, anything else the Gauss-point kernel. With weights as unknowns the
+//! kernels fill full `4N × 4N` blocks through the Jacobian with weight columns.
 
 use nurbspring_geom::{BSplineBasis, BasisScratch, GaussLegendre, Jacobian, LocalRationalBasis};
 use nurbspring_linalg::{KroneckerPattern, SparseMatrix};
