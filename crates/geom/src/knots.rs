@@ -250,8 +250,7 @@ mod tests {
         spans
             .iter()
             .copied()
-            .filter(|&i| k[i] <= u)
-            .last()
+            .rfind(|&i| k[i] <= u)
             .unwrap_or(spans[0])
     }
 
