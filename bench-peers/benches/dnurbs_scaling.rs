@@ -1,5 +1,6 @@
-//! D-NURBS assembly and Terzopoulos–Qin step at several patch sizes (docs/benchmarks.md,
-//! "Assembly"): is the step after the factorization O(nnz)?
+//! D-NURBS assembly (the pattern, then the values with the pattern reused) and the
+//! Terzopoulos–Qin step at several patch sizes (docs/benchmarks.md, "Assembly"): is the step
+//! after the factorization O(nnz)?
 //!
 //! The patch is the one of `crates/dnurbs/benches/assembly.rs` at 32 × 32, 64 × 64 and
 //! 128 × 128 elements (bicubic, control points `(u, v, 0.1 sin 3u cos 2v)` at the Greville
@@ -113,6 +114,11 @@ fn benches(c: &mut Criterion) {
         );
         let assembler = Assembler::new(&geometry, &options).unwrap();
         group.throughput(Throughput::Elements(geometry.n_control_points() as u64));
+        group.bench_with_input(
+            BenchmarkId::new("pattern (Assembler::new)", elements),
+            &elements,
+            |b, _| b.iter(|| Assembler::new(&geometry, &options).unwrap()),
+        );
         group.bench_with_input(
             BenchmarkId::new("assemble_scalar (pattern reused)", elements),
             &elements,

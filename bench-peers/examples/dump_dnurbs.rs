@@ -6,7 +6,7 @@
 //! elements, control points at the Greville abscissae `(u, v, 0.1 sin 3u cos 2v)`, μ = 1,
 //! β11 = β22 = 1, 4 × 4 Gauss points per element. Written (CSC, little endian):
 //! - `tensor_{mass,stiffness}.*`: `Assembler::assemble_scalar` with the default options
-//!   (parameter-domain integration, the sum-factorized kernel), on that patch;
+//!   (parameter-domain integration, the exact Kronecker form), on that patch;
 //! - `gauss_{mass,stiffness}.*`: the same with `Integration::Area` (the Gauss-point kernel)
 //!   on the flat patch `z = 0`, where the area element is 1 and the matrices must be the same.
 //!

@@ -1,6 +1,10 @@
 //! Assembly of M and K (β11 = β22 = 1) for a bicubic patch of 128 × 128 elements
 //! (131 × 131 = 17,161 control points, 51,483 dofs), and one Terzopoulos–Qin step after the
-//! factorization. Run: `cargo bench -p nurbspring-dnurbs -- --quick`.
+//! factorization. The B-spline patch over the parameter domain takes the exact Kronecker form;
+//! the same patch with unequal weights, or integrated over its area, takes the Gauss-point
+//! kernel (4 × 4 points an element, as G+Smo in bench-peers/gismo_assembly.py); weights as
+//! unknowns (4N × 4N) are measured on 32 × 32 elements. Run:
+//! `cargo bench -p nurbspring-dnurbs --bench assembly`.
 
 // `criterion_group!` generates an undocumented public function.
 #![allow(missing_docs)]
@@ -18,7 +22,11 @@ use nurbspring_sim::{IntegratorKind, make_stepper};
 const ELEMENTS: usize = 128;
 
 fn patch() -> NurbsSurface {
-    let k = KnotVector::clamped_uniform(3, ELEMENTS).unwrap();
+    patch_of(ELEMENTS)
+}
+
+fn patch_of(elements: usize) -> NurbsSurface {
+    let k = KnotVector::clamped_uniform(3, elements).unwrap();
     let g = k.greville();
     let pts: Vec<[f64; 3]> = g
         .iter()
@@ -85,6 +93,42 @@ fn benches(c: &mut Criterion) {
     group.bench_function("assemble (M, D, K, f on 3N dofs)", |b| {
         b.iter(|| assemble(&geometry, &material(), &Loads::default(), &options).unwrap())
     });
+    // The general path, pattern included, 4 x 4 Gauss points an element.
+    let four = DnurbsOptions {
+        quadrature_points: Some(4),
+        ..options.clone()
+    };
+    let rational = {
+        let s = patch();
+        let w: Vec<f64> = (0..s.n_control_points())
+            .map(|k| 1.0 + 0.25 * ((k * 7) % 5) as f64 / 4.0)
+            .collect();
+        Geometry::Surface(
+            s.with_control_points_and_weights(s.control_points().to_vec(), w)
+                .unwrap(),
+        )
+    };
+    group.bench_function(
+        "assemble_scalar, unequal weights (Gauss-point kernel, incl. pattern)",
+        |b| b.iter(|| assemble_scalar(&rational, &material(), &four).unwrap()),
+    );
+    let four_area = DnurbsOptions {
+        integration: nurbspring_dnurbs::Integration::Area,
+        ..four.clone()
+    };
+    group.bench_function(
+        "assemble_scalar, area integration (Gauss-point kernel, incl. pattern)",
+        |b| b.iter(|| assemble_scalar(&geometry, &material(), &four_area).unwrap()),
+    );
+    let small = Geometry::Surface(patch_of(32));
+    let wad = DnurbsOptions {
+        weights_as_dofs: true,
+        ..four.clone()
+    };
+    group.bench_function(
+        "assemble, weights as dofs, 32 x 32 elements (4N dofs, incl. pattern)",
+        |b| b.iter(|| assemble(&small, &material(), &Loads::default(), &wad).unwrap()),
+    );
     let constraints = Constraints {
         fixed_rings: 1,
         ..Constraints::default()

@@ -1,10 +1,7 @@
 //! The shape a D-NURBS model is built on: a NURBS surface or curve (paper eq. (1)), with
 //! conversions between the shape and the generalized coordinates `p` (docs/math.md §1).
 
-use nurbspring_geom::{
-    Deriv, GeomError, Jacobian, LocalRationalBasis, NurbsCurve, NurbsSurface, QuadratureElement,
-    curve_rule, surface_rule,
-};
+use nurbspring_geom::{Deriv, GeomError, Jacobian, LocalRationalBasis, NurbsCurve, NurbsSurface};
 
 use nurbspring_linalg::SparseMatrix;
 
@@ -231,41 +228,6 @@ impl Geometry {
         match self {
             Geometry::Surface(s) => s.derivatives_with(u, v, 0, buffer).point,
             Geometry::Curve(c) => c.point(u).unwrap_or([f64::NAN; 3]),
-        }
-    }
-
-    /// Gauss–Legendre points grouped by element (non-empty knot span or span pair).
-    pub(crate) fn quadrature(&self, points: usize) -> Result<Vec<QuadratureElement>, GeomError> {
-        match self {
-            Geometry::Surface(s) => surface_rule(s.basis_u(), s.basis_v(), points),
-            Geometry::Curve(c) => curve_rule(c.basis(), points),
-        }
-    }
-
-    /// Number of control points whose basis functions are non-zero on one element.
-    pub(crate) fn n_local(&self) -> usize {
-        let (p, q) = self.degrees();
-        match self {
-            Geometry::Surface(_) => (p + 1) * (q + 1),
-            Geometry::Curve(_) => p + 1,
-        }
-    }
-
-    /// Flat indices of the control points supported on the element `(span_u, span_v)`, in the
-    /// order of `Jacobian::indices` at any point inside it.
-    pub(crate) fn element_points(&self, span_u: usize, span_v: usize, out: &mut Vec<usize>) {
-        out.clear();
-        let (p, q) = self.degrees();
-        match self {
-            Geometry::Surface(s) => {
-                let n_v = s.n_v();
-                for a in 0..=p {
-                    for b in 0..=q {
-                        out.push((span_u - p + a) * n_v + span_v - q + b);
-                    }
-                }
-            }
-            Geometry::Curve(_) => out.extend(span_u - p..=span_u),
         }
     }
 }

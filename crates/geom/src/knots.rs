@@ -136,10 +136,15 @@ impl KnotVector {
         }
     }
 
-    /// The knot span index `i` with `u_i ≤ u < u_{i+1}` (The NURBS Book A2.1, by bisection).
+    /// The knot span index `i` with `u_i ≤ u < u_{i+1}` (The NURBS Book A2.1).
     /// Right-continuous at interior knots; at the end of the domain the last non-empty span.
     /// Parameters outside the domain are clamped to it (callers validate with
     /// [`KnotVector::check_parameter`]).
+    ///
+    /// With at most [`LINEAR_SPAN_SEARCH`] interior knots the span is counted without branches
+    /// (`p` plus the number of knots `u_{p+1} … u_n` at or below `u`: they are a prefix, since the
+    /// knots do not decrease), which avoids the mispredicted branches of bisection on scattered
+    /// parameters; longer knot vectors are bisected. Both give the same span.
     pub fn find_span(&self, u: f64) -> usize {
         let p = self.degree;
         let n = self.n_basis() - 1;
@@ -159,6 +164,12 @@ impl KnotVector {
                 i += 1;
             }
             return i;
+        }
+        if n - p <= LINEAR_SPAN_SEARCH {
+            return p + k[p + 1..=n]
+                .iter()
+                .map(|&x| usize::from(x <= u))
+                .sum::<usize>();
         }
         let (mut low, mut high) = (p, n + 1);
         let mut mid = (low + high) / 2;
@@ -221,9 +232,55 @@ impl KnotVector {
     }
 }
 
+/// Interior knot counts up to which [`KnotVector::find_span`] counts instead of bisecting.
+pub const LINEAR_SPAN_SEARCH: usize = 16;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// A2.1 by definition: the largest `i ≤ n` with `u_i ≤ u` and `u_i < u_{i+1}`, clamped to
+    /// the first and last non-empty spans.
+    fn span_by_definition(kv: &KnotVector, u: f64) -> usize {
+        let k = kv.knots();
+        let (p, n) = (kv.degree(), kv.n_basis() - 1);
+        let spans: Vec<usize> = (p..=n).filter(|&i| k[i] < k[i + 1]).collect();
+        let u = u.clamp(k[p], k[n + 1]);
+        spans
+            .iter()
+            .copied()
+            .rfind(|&i| k[i] <= u)
+            .unwrap_or(spans[0])
+    }
+
+    proptest! {
+        /// Counting (short knot vectors) and bisection (long ones) both follow A2.1, at random
+        /// parameters and exactly at (repeated) knots.
+        #[test]
+        fn find_span_follows_the_definition(
+            p in 1usize..4,
+            steps in prop::collection::vec(0u8..3, 1..40),
+            ts in prop::collection::vec(-0.1f64..1.1, 1..20),
+        ) {
+            let mut k = vec![0.0; p + 1];
+            let mut x = 0.0;
+            for &s in &steps {
+                x += f64::from(s);
+                if k.iter().filter(|&&y| y == x).count() < p {
+                    k.push(x);
+                }
+            }
+            let end = x + 1.0;
+            k.extend(std::iter::repeat_n(end, p + 1));
+            let kv = KnotVector::try_new(k.clone(), p).unwrap();
+            let mut us: Vec<f64> = ts.iter().map(|t| t * end).collect();
+            us.extend(&k);
+            for u in us {
+                prop_assert_eq!(kv.find_span(u), span_by_definition(&kv, u), "u = {}", u);
+            }
+        }
+    }
 
     #[test]
     fn validation_errors() {

@@ -43,7 +43,7 @@ pub use basis::{BSplineBasis, BasisScratch};
 pub use curve::{CurveDerivatives, NurbsCurve};
 pub use error::GeomError;
 pub use jacobian::{Deriv, Jacobian, SurfaceJacobian};
-pub use knots::KnotVector;
+pub use knots::{KnotVector, LINEAR_SPAN_SEARCH};
 pub use quadrature::{GaussLegendre, QuadratureElement, QuadraturePoint, curve_rule, surface_rule};
 pub use refine::{
     RefinementMatrix, elevate_degree, from_homogeneous, insert_knot, refine_knots, refine_uniform,

@@ -42,7 +42,7 @@ mod lstsq;
 mod solvers;
 mod sparse;
 
-pub use assembly::AssemblyPattern;
+pub use assembly::{AssemblyPattern, KroneckerPattern};
 pub use dense::DenseMatrix;
 pub use eigen::{
     SymmetricEigen, generalized_eigen_sparse_lowest, generalized_symmetric_eigen,

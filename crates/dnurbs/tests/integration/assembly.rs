@@ -468,3 +468,72 @@ fn automatic_quadrature_search_is_bounded_on_extreme_weights() {
     }
     assert!(choice.estimated_error.is_finite());
 }
+
+/// The exact Kronecker form (parameter integration of a B-spline) against the Gauss-point
+/// kernel, through the public model with constraints: on the affine sheet
+/// `c(u, v) = (a u, b v, 0)` the area element is the constant `a b`, so the area-integrated
+/// matrices (Gauss-point kernel) are `a b` times the parameter-integrated ones (Kronecker
+/// form), on repeated interior knots, with fixed rings, fixed points and a linear constraint.
+#[test]
+fn kronecker_form_equals_the_gauss_point_kernel_under_constraints() {
+    use nurbspring_dnurbs::{Constraints, DnurbsModel, LinearConstraint};
+    use nurbspring_geom::{KnotVector, NurbsSurface};
+    let ku =
+        KnotVector::try_new(vec![0., 0., 0., 0., 0.2, 0.2, 0.5, 0.8, 1., 1., 1., 1.], 3).unwrap();
+    let kv = KnotVector::try_new(vec![0., 0., 0., 0.3, 0.3, 0.6, 1., 1., 1.], 2).unwrap();
+    let (a, b) = (2.0, 3.5);
+    let (gu, gv) = (ku.greville(), kv.greville());
+    let pts: Vec<[f64; 3]> = gu
+        .iter()
+        .flat_map(|&u| gv.iter().map(move |&v| [a * u, b * v, 0.0]))
+        .collect();
+    let n = pts.len();
+    let sheet = NurbsSurface::try_new(ku, kv, pts, vec![1.0; n]).unwrap();
+    let constraints = [
+        Constraints {
+            fixed_rings: 1,
+            ..Constraints::default()
+        },
+        Constraints {
+            fixed_points: vec![0, 5, 17],
+            linear: vec![LinearConstraint {
+                terms: vec![(30, 1.0), (31, -0.5)],
+                rhs: 0.0,
+            }],
+            ..Constraints::default()
+        },
+    ];
+    let loads = Loads {
+        gravity: [0.0, 0.0, -9.81],
+        ..Loads::default()
+    };
+    for c in &constraints {
+        let model = |integration| {
+            let options = DnurbsOptions {
+                quadrature_points: Some(4),
+                integration,
+                ..DnurbsOptions::default()
+            };
+            DnurbsModel::new(
+                Geometry::Surface(sheet.clone()),
+                all_terms(),
+                loads.clone(),
+                c,
+                options,
+            )
+            .unwrap()
+        };
+        let (fast, gauss) = (model(Integration::Parameter), model(Integration::Area));
+        let scaled = |m: &SparseMatrix| {
+            let mut m = m.clone();
+            m.scale(a * b);
+            m
+        };
+        assert!(support::rel_diff(gauss.reduced_mass(), &scaled(fast.reduced_mass())) < 1e-14);
+        assert!(
+            support::rel_diff(gauss.reduced_stiffness(), &scaled(fast.reduced_stiffness())) < 1e-14
+        );
+        let f: Vec<f64> = fast.reduced_force().iter().map(|x| a * b * x).collect();
+        assert!(support::rel_vec(gauss.reduced_force(), &f) < 1e-14);
+    }
+}
