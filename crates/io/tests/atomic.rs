@@ -103,7 +103,7 @@ fn concurrent_readers_only_ever_see_complete_versions() {
             while !stop.load(std::sync::atomic::Ordering::Relaxed) || reads == 0 {
                 let got = std::fs::read(&path).unwrap();
                 assert!(
-                    versions.iter().any(|v| *v == got),
+                    versions.contains(&got),
                     "a reader saw a partial or mixed file of {} bytes",
                     got.len()
                 );
