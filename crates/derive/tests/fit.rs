@@ -257,3 +257,180 @@ fn omega_maps_control_points_to_nodes() {
         }
     }
 }
+
+// ------------------------------------------------------------------ values recomputed outside the fit
+
+/// Dense copy as row-major `Vec<Vec<f64>>`, for sums done here rather than by the fit.
+fn dense(a: &SparseMatrix) -> Vec<Vec<f64>> {
+    let d = a.to_dense();
+    (0..d.nrows()).map(|i| d.row(i).to_vec()).collect()
+}
+
+fn frobenius(a: &[Vec<f64>]) -> f64 {
+    a.iter().flatten().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+fn minus(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    a.iter()
+        .zip(b)
+        .map(|(r, s)| r.iter().zip(s).map(|(x, y)| x - y).collect())
+        .collect()
+}
+
+/// Spectral norm of a symmetric matrix by power iteration on `A²` (independent of the
+/// eigensolver the fit uses): the Rayleigh quotient of `A²` converges as `(λ₂/λ₁)⁴` per
+/// iteration; 4000 iterations.
+fn spectral_norm_by_power_iteration(a: &[Vec<f64>]) -> f64 {
+    let n = a.len();
+    let mut x: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * ((i * 7) % 11) as f64).collect();
+    let mul = |x: &[f64]| -> Vec<f64> {
+        a.iter()
+            .map(|r| r.iter().zip(x).map(|(p, q)| p * q).sum())
+            .collect()
+    };
+    let mut lambda2 = 0.0;
+    for _ in 0..4000 {
+        let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        x.iter_mut().for_each(|v| *v /= norm);
+        let y = mul(&mul(&x));
+        // Rayleigh quotient of A² at the unit vector x.
+        lambda2 = x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>();
+        x = y;
+    }
+    lambda2.sqrt()
+}
+
+/// Ωᵀ K_S(k) Ω built the slow way: set the constants on the lattice, take its tangent stiffness.
+fn pulled_back(
+    lat: &SpringLattice,
+    omega: &SparseMatrix,
+    classes: &[Class],
+    k: &[f64],
+) -> SparseMatrix {
+    let mut lat = lat.clone();
+    lat.set_constants(&Constants::from_values(classes, k));
+    synthetic_k_d(&lat, omega)
+}
+
+/// `model_matrix(k)` is `Ωᵀ K_S(k) Ω` of the lattice carrying k; the Frobenius fit of a
+/// target that is not in the span is stationary (`⟨H_c, model(k) − K_D⟩_F = 0`, the normal
+/// equations), and its `relative_residual` is the residual recomputed here.
+#[test]
+fn model_matrix_and_the_frobenius_residual_recomputed_from_the_constants() {
+    let s = surface(true);
+    let lat = lattice(&s, true, [2.5, 0.75, 0.3], ParameterGrid::Knots);
+    let (omega, unit) = setup(&lat, &s);
+    let n = omega.ncols();
+    // A target outside the span: the lattice's own stiffness plus a diagonal.
+    let diag =
+        SparseMatrix::from_diagonal(&(0..n).map(|i| 0.5 + 0.01 * i as f64).collect::<Vec<_>>());
+    let k_d =
+        SparseMatrix::linear_combination(1.0, &synthetic_k_d(&lat, &omega), 1.0, &diag).unwrap();
+    let fit = StiffnessFit::new(&k_d, &omega, &unit, lat.springs.len(), None).unwrap();
+    let classes = fit.classes().to_vec();
+
+    let probe = [1.3, 0.2, 0.05];
+    let by_lattice = dense(&pulled_back(&lat, &omega, &classes, &probe));
+    let by_fit = dense(&fit.model_matrix(&probe).unwrap());
+    assert!(frobenius(&minus(&by_fit, &by_lattice)) < 1e-13 * frobenius(&by_lattice));
+
+    let k = fit.solve(false).unwrap();
+    let model = dense(&pulled_back(&lat, &omega, &classes, &k));
+    let target = dense(&k_d);
+    let r = minus(&model, &target);
+    let residual = frobenius(&r) / frobenius(&target);
+    assert!(
+        residual > 1e-3,
+        "the target is outside the span: {residual}"
+    );
+    assert!(
+        (fit.relative_residual(&k).unwrap() - residual).abs() < 1e-12 * residual,
+        "{} vs {residual}",
+        fit.relative_residual(&k).unwrap()
+    );
+    for (c, (_, g)) in unit.iter().enumerate() {
+        let h = dense(
+            &omega
+                .transpose()
+                .matmul(&g.matmul(&omega).unwrap())
+                .unwrap(),
+        );
+        let inner: f64 = h
+            .iter()
+            .flatten()
+            .zip(r.iter().flatten())
+            .map(|(a, b)| a * b)
+            .sum();
+        assert!(
+            inner.abs() < 1e-10 * frobenius(&h) * frobenius(&r),
+            "normal equation {c}: {inner:e}"
+        );
+    }
+}
+
+/// `relative_spectral_residual` against residuals known in closed form (`K_D = 2 Ωᵀ K_S Ω`:
+/// 1/2 at the lattice's constants, 1 at zero) and against power iteration; `solve_spectral`
+/// returns a point whose residual it reports, no worse than the Frobenius solution's, and the
+/// exact constants when the target is in the span.
+#[test]
+fn spectral_residual_and_fit_against_closed_forms_and_power_iteration() {
+    let s = surface(true);
+    let truth = [2.5, 0.75, 0.3];
+    let lat = lattice(&s, true, truth, ParameterGrid::Knots);
+    let (omega, unit) = setup(&lat, &s);
+    let exact = synthetic_k_d(&lat, &omega);
+    let twice = SparseMatrix::linear_combination(2.0, &exact, 0.0, &exact).unwrap();
+    let fit = StiffnessFit::new(&twice, &omega, &unit, lat.springs.len(), None).unwrap();
+    let classes = fit.classes().to_vec();
+    let t: Vec<f64> = classes
+        .iter()
+        .map(|c| match c {
+            Class::Spring(SpringKind::Structural) => truth[0],
+            Class::Spring(SpringKind::Shear) => truth[1],
+            Class::Spring(SpringKind::Bend) => truth[2],
+            Class::Linear(..) => unreachable!(),
+        })
+        .collect();
+    assert!((fit.relative_spectral_residual(&t).unwrap() - 0.5).abs() < 1e-12);
+    assert!((fit.relative_spectral_residual(&vec![0.0; t.len()]).unwrap() - 1.0).abs() < 1e-12);
+    let probe = [1.0, 2.0, 0.1];
+    let d = minus(
+        &dense(&pulled_back(&lat, &omega, &classes, &probe)),
+        &dense(&twice),
+    );
+    let want =
+        spectral_norm_by_power_iteration(&d) / spectral_norm_by_power_iteration(&dense(&twice));
+    let got = fit.relative_spectral_residual(&probe).unwrap();
+    assert!(
+        (got - want).abs() < 1e-8 * want,
+        "{got} vs power iteration {want}"
+    );
+
+    // In the span: the exact constants, residual ~ 0.
+    let (k, r) = fit.solve_spectral().unwrap();
+    for i in 0..k.len() {
+        assert!(
+            (k[i] - 2.0 * t[i]).abs() < 1e-9 * t[i],
+            "{k:?} vs 2 × {t:?}"
+        );
+    }
+    assert!(r < 1e-12, "{r:e}");
+
+    // Outside the span: the reported residual is the residual at the returned k, and no worse
+    // than the Frobenius fit's.
+    let n = omega.ncols();
+    let diag =
+        SparseMatrix::from_diagonal(&(0..n).map(|i| 0.5 + 0.01 * i as f64).collect::<Vec<_>>());
+    let k_d = SparseMatrix::linear_combination(1.0, &exact, 1.0, &diag).unwrap();
+    let fit = StiffnessFit::new(&k_d, &omega, &unit, lat.springs.len(), None).unwrap();
+    let (k, r) = fit.solve_spectral().unwrap();
+    let d = minus(
+        &dense(&pulled_back(&lat, &omega, &classes, &k)),
+        &dense(&k_d),
+    );
+    let want =
+        spectral_norm_by_power_iteration(&d) / spectral_norm_by_power_iteration(&dense(&k_d));
+    assert!((r - want).abs() < 1e-8 * want, "{r} vs {want}");
+    let frob = fit.solve(false).unwrap();
+    assert!(r <= fit.relative_spectral_residual(&frob).unwrap() * (1.0 + 1e-12));
+}

@@ -217,7 +217,7 @@ fn same_results_with_one_and_many_threads() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(24))]
+    #![proptest_config(ProptestConfig::with_cases(256))]
 
     /// Forces sum to zero, vanish at rest, and K_T annihilates rigid translations.
     #[test]

@@ -500,3 +500,78 @@ fn json_errors() {
         Err(MsmError::LengthMismatch { .. })
     ));
 }
+
+// ------------------------------------------------------------------ values of small public functions
+
+/// `gravity_forces` is `m_a g + F_a` per node (paper eq. (6)), interleaved; a node without an
+/// entry in `forces` gets gravity only.
+#[test]
+fn gravity_forces_are_mass_times_gravity_plus_node_forces() {
+    use nurbspring_msm::{Spring, SpringKind, SpringLattice};
+    let spring = |a, b| Spring {
+        a,
+        b,
+        kind: SpringKind::Structural,
+        k: 1.0,
+        rest_length: 1.0,
+    };
+    let mut lat = SpringLattice::from_parts(
+        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 2.0, 0.0]],
+        vec![2.0, 3.0, 0.5],
+        vec![0.0; 3],
+        vec![false; 3],
+        vec![spring(0, 1), spring(1, 2)],
+        [0.1, -0.2, -9.81],
+    )
+    .unwrap();
+    lat.forces = vec![[1.0, 0.0, 0.0], [0.0, 0.0, 4.0]];
+    let f = lat.gravity_forces();
+    let want = [
+        2.0 * 0.1 + 1.0,
+        2.0 * -0.2,
+        2.0 * -9.81,
+        3.0 * 0.1,
+        3.0 * -0.2,
+        3.0 * -9.81 + 4.0,
+        0.5 * 0.1,
+        0.5 * -0.2,
+        0.5 * -9.81,
+    ];
+    assert_eq!(f.len(), 9);
+    for (got, want) in f.iter().zip(want) {
+        assert!(
+            (got - want).abs() <= 4.0 * f64::EPSILON * want.abs(),
+            "{f:?}"
+        );
+    }
+}
+
+/// `spring_lengths` are the Euclidean distances `|x_a − x_b|` at the positions given (a 3-4-5
+/// triangle and a 1-2-2 box diagonal, exact in floating point).
+#[test]
+fn spring_lengths_are_the_distances_at_the_positions_given() {
+    use nurbspring_msm::{Spring, SpringKind, SpringLattice};
+    let spring = |a, b| Spring {
+        a,
+        b,
+        kind: SpringKind::Shear,
+        k: 1.0,
+        rest_length: 0.5,
+    };
+    let lat = SpringLattice::from_parts(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![1.0; 3],
+        vec![0.0; 3],
+        vec![false; 3],
+        vec![spring(0, 1), spring(1, 2), spring(0, 2)],
+        [0.0; 3],
+    )
+    .unwrap();
+    let x = [0.0, 0.0, 0.0, 3.0, 4.0, 0.0, 1.0, 2.0, -2.0];
+    let l = lat.spring_lengths(&x);
+    let want = [5.0, 12f64.sqrt(), 3.0];
+    assert_eq!(l.len(), 3);
+    for (got, want) in l.iter().zip(want) {
+        assert!((got - want).abs() <= 2.0 * f64::EPSILON * want, "{l:?}");
+    }
+}

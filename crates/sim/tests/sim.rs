@@ -347,6 +347,168 @@ fn verlet_converges_at_second_order_and_symplectic_euler_at_first() {
     order_on_chain(IntegratorKind::SymplecticEuler, [0.004, 0.002, 0.001], 1);
 }
 
+// ------------------------------------------------------------------ velocities
+
+/// The velocity each scheme returns against `q̇` of the closed form, with the scheme's order
+/// (the velocity of every scheme here converges at the order of its positions).
+fn velocity_order_on_chain(kind: IntegratorKind, dts: [f64; 3], order: i32) {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let q_eq = equilibrium(&model);
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let t_end = 1.0;
+    let exact = c.exact_velocity(&q_eq, &q0, &v0, t_end);
+    let err = |dt: f64| max_abs_diff(&run(&model, kind, &q0, &v0, dt, t_end).v, &exact);
+    let e: Vec<f64> = dts.iter().map(|&dt| err(dt)).collect();
+    assert_order(&format!("{} velocity", kind.name()), e[0] / e[1], order);
+    assert_order(&format!("{} velocity", kind.name()), e[1] / e[2], order);
+}
+
+#[test]
+fn the_closed_form_velocity_is_the_derivative_of_the_closed_form_position() {
+    // Checks the reference itself: central differences of `exact` in t (h = 1e-4, error
+    // ~ h² |q⃛| ≈ 1e-8 · ω³ ≲ 1e-6 for ω_max ≈ 4.9).
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let q_eq = equilibrium(&model);
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let h = 1e-4;
+    for t in [0.0, 0.37, 1.0] {
+        let (qp, qm) = (
+            c.exact(&q_eq, &q0, &v0, t + h),
+            c.exact(&q_eq, &q0, &v0, t - h),
+        );
+        let fd: Vec<f64> = qp
+            .iter()
+            .zip(&qm)
+            .map(|(a, b)| (a - b) / (2.0 * h))
+            .collect();
+        assert!(max_abs_diff(&fd, &c.exact_velocity(&q_eq, &q0, &v0, t)) < 1e-6);
+    }
+    assert!(max_abs_diff(&c.exact_velocity(&q_eq, &q0, &v0, 0.0), &v0) < tol::EXACT);
+}
+
+#[test]
+fn modal_velocity_equals_the_closed_form() {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let q_eq = equilibrium(&model);
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let end = run(&model, IntegratorKind::Modal, &q0, &v0, 0.01, 1.0);
+    let exact = c.exact_velocity(&q_eq, &q0, &v0, 1.0);
+    assert!(
+        max_abs_diff(&end.v, &exact) < tol::MODAL,
+        "{:e}",
+        max_abs_diff(&end.v, &exact)
+    );
+}
+
+#[test]
+fn velocities_converge_at_the_order_of_each_scheme() {
+    velocity_order_on_chain(IntegratorKind::Rk4, [0.04, 0.02, 0.01], 4);
+    velocity_order_on_chain(IntegratorKind::Newmark, [0.04, 0.02, 0.01], 2);
+    velocity_order_on_chain(IntegratorKind::VelocityVerlet, [0.04, 0.02, 0.01], 2);
+    velocity_order_on_chain(IntegratorKind::SymplecticEuler, [0.004, 0.002, 0.001], 1);
+    velocity_order_on_chain(IntegratorKind::BackwardEuler, [0.004, 0.002, 0.001], 1);
+    velocity_order_on_chain(IntegratorKind::TerzopoulosQin, [0.004, 0.002, 0.001], 1);
+}
+
+// ------------------------------------------------------------------ one step by hand
+
+/// `make_stepper_with_options` takes Δt from the options: one step of a unit oscillator
+/// (`m = 2`, `k = 8`, ω² = 4) against the update formulas of each scheme done by hand.
+#[test]
+fn make_stepper_with_options_steps_by_the_formulas() {
+    let model = LinearModel::new(
+        SystemMatrix::Diagonal(vec![2.0]),
+        SparseMatrix::from_triplets(1, 1, &[(0, 0, 8.0)]).unwrap(),
+    );
+    let (q0, v0, w2) = (0.3, -0.7, 4.0);
+    let dt = 0.1;
+    let opts = RunOptions::new(dt, 1.0, IntegratorKind::SymplecticEuler);
+    let one_step = |kind: IntegratorKind| {
+        let initial = State::new(vec![q0], vec![v0]);
+        let mut stepper = make_stepper_with_options(kind, &model, &initial, &opts).unwrap();
+        let mut s = initial.clone();
+        stepper.step(&model, &mut s, dt).unwrap();
+        (s.q[0], s.v[0])
+    };
+    let close = |name: &str, got: (f64, f64), want: (f64, f64)| {
+        assert!(
+            (got.0 - want.0).abs() < tol::EXACT && (got.1 - want.1).abs() < tol::EXACT,
+            "{name}: {got:?} vs {want:?}"
+        );
+    };
+    // Symplectic Euler: v₁ = v₀ − Δt ω² q₀, q₁ = q₀ + Δt v₁.
+    let v1 = v0 - dt * w2 * q0;
+    close(
+        "symplectic Euler",
+        one_step(IntegratorKind::SymplecticEuler),
+        (q0 + dt * v1, v1),
+    );
+    // Velocity Verlet: a₀ = −ω² q₀, q₁ = q₀ + Δt v₀ + Δt² a₀ / 2, v₁ = v₀ + Δt (a₀ + a₁) / 2.
+    let a0 = -w2 * q0;
+    let q1 = q0 + dt * v0 + 0.5 * dt * dt * a0;
+    close(
+        "velocity Verlet",
+        one_step(IntegratorKind::VelocityVerlet),
+        (q1, v0 + 0.5 * dt * (a0 - w2 * q1)),
+    );
+    // Newmark average acceleration: q₁ = ((1 − Δt²ω²/4) q₀ + Δt v₀) / (1 + Δt²ω²/4),
+    // v₁ = v₀ + Δt (a₀ + a₁) / 2.
+    let c = dt * dt * w2 / 4.0;
+    let q1 = ((1.0 - c) * q0 + dt * v0) / (1.0 + c);
+    close(
+        "newmark",
+        one_step(IntegratorKind::Newmark),
+        (q1, v0 + 0.5 * dt * (a0 - w2 * q1)),
+    );
+    // Backward Euler: v₁ = v₀ − Δt ω² q₁, q₁ = q₀ + Δt v₁ ⇒ q₁ = (q₀ + Δt v₀) / (1 + Δt² ω²).
+    let q1 = (q0 + dt * v0) / (1.0 + dt * dt * w2);
+    close(
+        "backward Euler",
+        one_step(IntegratorKind::BackwardEuler),
+        (q1, v0 - dt * w2 * q1),
+    );
+    // Terzopoulos–Qin (D = 0): q⁻ = q₀ − Δt v₀, (2 + 2Δt²ω²) q₁ = 4 q₀ − 2 q⁻, and the velocity
+    // at the new time is the backward difference (3q₁ − 4q₀ + q⁻) / 2Δt.
+    let qm = q0 - dt * v0;
+    let q1 = (4.0 * q0 - 2.0 * qm) / (2.0 + 2.0 * dt * dt * w2);
+    close(
+        "terzopoulos-qin",
+        one_step(IntegratorKind::TerzopoulosQin),
+        (q1, (3.0 * q1 - 4.0 * q0 + qm) / (2.0 * dt)),
+    );
+    // RK4 on the linear system y' = A y is the Taylor polynomial of exp(AΔt) to order 4;
+    // A² = −ω² I: c = 1 − Δt²ω²/2 + Δt⁴ω⁴/24, s = Δt − Δt³ω²/6.
+    let (cc, ss) = (
+        1.0 - dt * dt * w2 / 2.0 + dt.powi(4) * w2 * w2 / 24.0,
+        dt - dt.powi(3) * w2 / 6.0,
+    );
+    close(
+        "rk4",
+        one_step(IntegratorKind::Rk4),
+        (cc * q0 + ss * v0, cc * v0 - ss * w2 * q0),
+    );
+    // Modal (exact): q₁ = q₀ cos ωΔt + v₀/ω sin ωΔt.
+    let w = w2.sqrt();
+    close(
+        "modal",
+        one_step(IntegratorKind::Modal),
+        (
+            q0 * (w * dt).cos() + v0 / w * (w * dt).sin(),
+            -q0 * w * (w * dt).sin() + v0 * (w * dt).cos(),
+        ),
+    );
+    // A non-positive Δt in the options is refused.
+    let bad = RunOptions::new(-0.1, 1.0, IntegratorKind::Newmark);
+    let initial = State::new(vec![q0], vec![v0]);
+    assert!(matches!(
+        make_stepper_with_options(IntegratorKind::Newmark, &model, &initial, &bad),
+        Err(SimError::InvalidTimeStep { .. })
+    ));
+}
+
 // ------------------------------------------------------------------ symplectic energy behaviour
 
 #[test]

@@ -44,7 +44,9 @@ fn string_errors(p: usize, elements: usize) -> [f64; 2] {
 
 #[test]
 fn string_frequencies_converge_at_rate_2p() {
-    for (p, grids) in [(2, [4, 8, 16]), (3, [4, 8, 16])] {
+    // Grids fine enough to be in the asymptotic range (on 4-8-16 the cubic second mode still
+    // converges at 6.6 and 6.3); errors stay far above round-off (1e-9 at 32 cubic elements).
+    for (p, grids) in [(2, [8, 16, 32]), (3, [8, 16, 32])] {
         let errors: Vec<[f64; 2]> = grids.iter().map(|&n| string_errors(p, n)).collect();
         for mode in 0..2 {
             let e: Vec<f64> = errors.iter().map(|e| e[mode]).collect();

@@ -158,3 +158,49 @@ fn literal_rest_shape_is_in_equilibrium_only_on_the_greville_net() {
     model.internal_force(&q0, &mut f);
     assert!(f.iter().all(|v| v.abs() <= 1e-15));
 }
+
+/// The modes checked without an eigensolver: each pair's residual `‖Kφ − ω²Mφ‖` recomputed
+/// from the matrices, M-orthonormality, and completeness `Σ ω² = tr(M⁻¹K)` (the trace from
+/// n Cholesky solves, not from an eigen-decomposition).
+#[test]
+fn modes_have_small_recomputed_residuals_and_sum_to_the_trace() {
+    use nurbspring_linalg::SpdSolver;
+    let model = support::paper_model(DnurbsOptions::default());
+    let n = model.n_free();
+    let modes = model.modes(n).unwrap();
+    let (k, m) = (model.reduced_stiffness(), model.reduced_mass());
+    let k_norm = k.frobenius_norm();
+    let m_norm = m.frobenius_norm();
+    let column = |j: usize| modes.vectors.column(j);
+    for j in 0..n {
+        let phi = column(j);
+        let (mut kp, mut mp) = (vec![0.0; n], vec![0.0; n]);
+        k.mul_vec(&phi, &mut kp);
+        m.mul_vec(&phi, &mut mp);
+        let l = modes.omega[j] * modes.omega[j];
+        let r: f64 = kp
+            .iter()
+            .zip(&mp)
+            .map(|(a, b)| (a - l * b).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let phi_norm = phi.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!(
+            r <= tol::SAME * (k_norm + l * m_norm) * phi_norm,
+            "mode {j}: residual {r:e}"
+        );
+        for i in 0..=j {
+            let mij: f64 = column(i).iter().zip(&mp).map(|(a, b)| a * b).sum();
+            let want = if i == j { 1.0 } else { 0.0 };
+            assert!((mij - want).abs() < tol::SAME, "φ_{i}ᵀ M φ_{j} = {mij}");
+        }
+    }
+    let solver = SpdSolver::new(m).unwrap();
+    let dense_k = k.to_dense();
+    let trace: f64 = (0..n).map(|j| solver.solve(&dense_k.column(j))[j]).sum();
+    let sum: f64 = modes.omega.iter().map(|w| w * w).sum();
+    assert!(
+        (sum - trace).abs() < tol::SAME * trace,
+        "Σω² = {sum}, tr(M⁻¹K) = {trace}"
+    );
+}

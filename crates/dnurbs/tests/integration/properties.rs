@@ -23,7 +23,7 @@ fn random_patch(p: usize, spans: usize, z: &[f64], w: &[f64]) -> NurbsSurface {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig::with_cases(256))]
 
     #[test]
     fn mass_spd_and_stiffness_annihilates_translations(

@@ -88,6 +88,29 @@ impl Chain {
     }
 }
 
+impl Chain {
+    /// Time derivative of [`Chain::exact`]:
+    /// `q̇(t) = Σ_j φ_j (−a_j ω_j sin ω_j t + b_j cos ω_j t)`, differentiated by hand.
+    pub fn exact_velocity(&self, q_eq: &[f64], q0: &[f64], v0: &[f64], t: f64) -> Vec<f64> {
+        let n = self.n;
+        let norm = 2.0 / (n as f64 + 1.0);
+        let mut v = vec![0.0; n];
+        for j in 1..=n {
+            let a: f64 = norm
+                * (0..n)
+                    .map(|i| self.mode(j, i) * (q0[i] - q_eq[i]))
+                    .sum::<f64>();
+            let b: f64 = norm * (0..n).map(|i| self.mode(j, i) * v0[i]).sum::<f64>();
+            let w = self.omega(j);
+            let c = -a * w * (w * t).sin() + b * (w * t).cos();
+            for (i, vi) in v.iter_mut().enumerate() {
+                *vi += c * self.mode(j, i);
+            }
+        }
+        v
+    }
+}
+
 /// Deterministic, non-symmetric initial data exciting every mode.
 pub fn initial_positions(n: usize) -> Vec<f64> {
     (0..n)
