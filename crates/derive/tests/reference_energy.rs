@@ -141,7 +141,8 @@ fn modal_reference_energies_match_a_time_stepped_dnurbs() {
             errors.push(e.iter().copied().fold(0.0, f64::max));
             eprintln!("{rest_shape:?} Δt = 0.08/{every}: energy errors {e:?}");
         }
-        assert!(errors[1] < 2e-3, "{rest_shape:?}: {errors:?}");
+        // Measured 5.0e-5 (initial rest shape) and 6.9e-5 (zero rest shape) at Δt = 0.08/16.
+        assert!(errors[1] < 2e-4, "{rest_shape:?}: {errors:?}");
         let ratio = errors[0] / errors[1];
         assert!(
             (3.0..5.0).contains(&ratio),

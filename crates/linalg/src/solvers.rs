@@ -40,8 +40,9 @@ fn llt_error(e: faer::linalg::cholesky::llt::factor::LltError) -> LinalgError {
 /// Sparse symmetric positive-definite solver: `A = L Lᵀ` by faer's sparse Cholesky (AMD
 /// ordering, supernodal or simplicial). The symbolic analysis is done once in [`SpdSolver::new`];
 /// [`SpdSolver::refactor`] redoes only the numeric factorization for a matrix with the same
-/// pattern (a different pattern triggers a new symbolic analysis), into buffers allocated once.
-/// Small systems factor on the calling thread; large ones use rayon's pool. Only the lower
+/// pattern (a different pattern triggers a new symbolic analysis), into factor storage
+/// allocated once (faer's scratch workspace is allocated per call). Small systems factor and
+/// solve on the calling thread; large ones use rayon's pool. Only the lower
 /// triangle of A is read, so A must be symmetric.
 ///
 /// ```

@@ -39,9 +39,7 @@ impl BackwardEuler {
             steps: 0,
         })
     }
-}
 
-impl BackwardEuler {
     /// How many Newton matrices were factored and Newton iterations run so far.
     pub fn newton_counts(&self) -> super::NewtonCounts {
         self.core.counts

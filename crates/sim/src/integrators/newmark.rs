@@ -73,9 +73,7 @@ impl Newmark {
             steps: 0,
         })
     }
-}
 
-impl Newmark {
     /// How many Newton matrices were factored and Newton iterations run so far.
     pub fn newton_counts(&self) -> super::NewtonCounts {
         self.core.counts
