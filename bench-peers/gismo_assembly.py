@@ -39,6 +39,10 @@ from scipy.interpolate import BSpline
 
 import pygismo as gs
 
+from results import record
+
+VERSIONS = {k: md.version(k) for k in ("pygismo", "numpy", "scipy")}
+
 P = 3
 NE = 128
 N1 = NE + P  # basis functions per direction
@@ -130,7 +134,9 @@ def timed(f, reps):
     return out, ts
 
 
-def show(name, ts):
+def show(name, ts, key=None):
+    if key:
+        record(key[0], key[1], ts, versions=VERSIONS)
     print(f"{name}: min {min(ts) * 1e3:.1f} ms, median {statistics.median(ts) * 1e3:.1f} ms "
           f"({len(ts)} runs)")
 
@@ -176,9 +182,9 @@ def main():
         return
     print(f"== timing, load average {os.getloadavg()}")
     _, ts = timed(lambda: gismo_mass(mp, mb), 7)
-    show("G+Smo mass (gsL2Projection.matrix, scalar)", ts)
+    show("G+Smo mass (gsL2Projection.matrix, scalar)", ts, ("gismo", "mass"))
     _, ts = timed(lambda: gismo_biharmonic(mp, mb), 5)
-    show("G+Smo biharmonic (gsBiharmonicExprAssembler: construct + assemble + matrix)", ts)
+    show("G+Smo biharmonic (gsBiharmonicExprAssembler: construct + assemble + matrix)", ts, ("gismo", "biharmonic"))
     bc = gs.pde.gsBoundaryConditions()
     f = gs.core.gsFunctionExpr("0", 2)
     a = gs.assembler.gsBiharmonicExprAssembler(mp, mb, f, bc)
@@ -191,7 +197,7 @@ def main():
     _, ts = timed(lambda: (lambda g: sp.kron(g[0], g[0], format="csr"))(gram_1d()), 11)
     show("Kronecker: mass only", ts)
     _, ts = timed(kron_mass_stiffness, 11)
-    show("Kronecker: mass and stiffness (K = G2 x G0 + G0 x G2)", ts)
+    show("Kronecker: mass and stiffness (K = G2 x G0 + G0 x G2)", ts, ("numpy-kronecker", "mass_stiffness"))
     print(f"== load average {os.getloadavg()}")
 
 

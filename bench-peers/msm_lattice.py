@@ -24,13 +24,13 @@ DT = 1e-5
 FIXED = [0, (N - 1) * N]
 
 
-def lattice():
-    """(x0 (nodes x 3), a, b, k, rest) with springs as int32 index arrays."""
-    t = np.arange(N) / (N - 1)
-    u, v = np.meshgrid(t, t, indexing="ij")  # node a = N i + j
+def lattice(n=N):
+    """(x0 (nodes x 3), a, b, k, rest) with springs as int32 index arrays, on n x n nodes."""
+    t = np.arange(n) / (n - 1)
+    u, v = np.meshgrid(t, t, indexing="ij")  # node a = n i + j
     z = 0.1 * ((1 - u) * v + u * (1 - v))
     x0 = np.stack([u, v, z], axis=-1).reshape(-1, 3)
-    idx = np.arange(N * N).reshape(N, N)
+    idx = np.arange(n * n).reshape(n, n)
     pairs = [
         (idx[:-1, :], idx[1:, :], K_EDGE),    # along u
         (idx[:, :-1], idx[:, 1:], K_EDGE),    # along v
@@ -44,16 +44,16 @@ def lattice():
     return x0, a, b, k, rest
 
 
-def free_mask():
-    m = np.ones(N * N, dtype=bool)
-    m[FIXED] = False
+def free_mask(n=N):
+    m = np.ones(n * n, dtype=bool)
+    m[[0, (n - 1) * n]] = False
     return m
 
 
 def initial_state(x0):
     """Perturbed positions (all nodes) and zero velocities."""
     x = x0.copy()
-    free = free_mask()
+    free = free_mask(int(round(np.sqrt(x0.shape[0]))))
     q = x[free].ravel()
     q += 1e-4 * np.sin(0.7 * np.arange(q.size))
     x[free] = q.reshape(-1, 3)

@@ -14,6 +14,7 @@ import time
 import numpy as np
 
 import msm_lattice as L
+from results import record
 
 
 def make_step(x0, a, b, k, rest, scatter="bincount"):
@@ -68,6 +69,7 @@ def main():
             t0 = time.perf_counter()
             st(x, v)
             ts.append(time.perf_counter() - t0)
+        record("numpy", f"step_256x256_{scatter}", ts, version=np.__version__)
         med = statistics.median(ts)
         print(f"numpy ({scatter}) step: median {med * 1e3:.2f} ms, min {min(ts) * 1e3:.2f} ms "
               f"over {steps} steps; {med / a.size * 1e9:.1f} ns/spring")

@@ -17,6 +17,7 @@ import numpy as np
 import taichi as ti
 
 import msm_lattice as L
+from results import record
 
 ti.init(arch=ti.cpu, default_fp=ti.f64, log_level=ti.WARN)
 
@@ -87,6 +88,8 @@ def main():
             step(L.DT)
         ti.sync()
         ts.append((time.perf_counter() - t0) / block)
+    record("taichi", "step_256x256", ts, version=md.version("taichi"),
+           threads=os.environ.get("RAYON_NUM_THREADS"))
     med = statistics.median(ts)
     print(f"taichi (cpu, f64) step: median {med * 1e3:.3f} ms, min {min(ts) * 1e3:.3f} ms "
           f"({blocks} blocks of {block} steps); {med / s * 1e9:.2f} ns/spring")

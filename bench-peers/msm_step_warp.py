@@ -17,6 +17,7 @@ import numpy as np
 import warp as wp
 
 import msm_lattice as L
+from results import record
 
 wp.config.quiet = True
 wp.init()
@@ -95,6 +96,8 @@ def main():
             step()
         wp.synchronize_device(dev)
         ts.append((time.perf_counter() - t0) / block)
+    record("warp", "step_256x256", ts, version=md.version("warp-lang"),
+           threads=os.environ.get("RAYON_NUM_THREADS"))
     med = statistics.median(ts)
     print(f"warp (cpu, f32) step: median {med * 1e3:.3f} ms, min {min(ts) * 1e3:.3f} ms "
           f"({blocks} blocks of {block} steps); {med / s * 1e9:.2f} ns/spring")

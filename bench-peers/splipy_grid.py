@@ -16,6 +16,8 @@ import time
 import numpy as np
 import splipy
 
+from results import record
+
 KNOTS = [0.0, 0.0, 0.0, 0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.0, 1.0, 1.0]
 
 # nurbspring-geom's NurbsSurface::grid on linspace(0, 1, 1000)² at a few grid points, as printed
@@ -59,6 +61,7 @@ def main():
     assert worst < 1e-14, worst
     assert abs(grid.sum() - NURBSPRING_CHECKSUM) < 1e-12 * NURBSPRING_CHECKSUM
     print(f"agrees with nurbspring at {len(NURBSPRING)} grid points to {worst:.1e}")
+    record("splipy", "grid_1000x1000", times, version=md.version("splipy"), agree=worst)
     # Per-point (scattered) evaluation, for reference: the same 4096 LCG parameters.
     state = 0x2545F4914F6CDD1D
     ps = []
@@ -76,6 +79,7 @@ def main():
         pts = s(us, vs, tensor=False)
         times.append(time.perf_counter() - start)
     print(f"scattered 4096 points (vectorised, tensor=False): min {min(times) * 1e9 / 4096:.0f} ns/point")
+    record("splipy", "point_scattered", [t / 4096 for t in times], version=md.version("splipy"))
     print(f"  first scattered point ({us[0]!r}, {vs[0]!r}) = {pts[0].tolist()}")
 
 

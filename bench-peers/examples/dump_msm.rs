@@ -10,6 +10,12 @@
 //! lattice), `q0`/`v0` (perturbed free coordinates and zero velocity), and `q{N}`/`v{N}` after
 //! N = 1 and 100 symplectic-Euler steps of Δt = 1e-5.
 //!
+//! For the backward-Euler peer (`bench-peers/msm_step_scipy_be.py`), the same sheet at 128 × 128
+//! nodes (node mass 1/128², nodes 0 and 127·128 fixed), perturbed the same way, after one
+//! backward-Euler step of Δt = 1e-3 with Newton to 1e-8 relative (the settings of
+//! `msm/backward_euler_step/128x128` in `crates/msm/benches/step.rs`): `be128_q0`, `be128_q1`,
+//! `be128_v1`.
+//!
 //! Run: `cargo run --release --manifest-path bench-peers/Cargo.toml --example dump_msm -- DIR`.
 
 use std::io::Write;
@@ -18,7 +24,7 @@ use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_msm::{
     Class, Constants, FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringKind, SpringLattice,
 };
-use nurbspring_sim::{IntegratorKind, make_stepper};
+use nurbspring_sim::{IntegratorKind, RunOptions, make_stepper, make_stepper_with_options};
 
 fn sheet(n: usize) -> MsmModel {
     let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
@@ -79,4 +85,21 @@ fn main() {
     }
     let vmax = state.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     println!("after 100 steps: max |v| = {vmax:e}");
+
+    let model = sheet(128);
+    let mut state = model.initial_state(&[]);
+    for (i, q) in state.q.iter_mut().enumerate() {
+        *q += 1e-4 * ((i as f64) * 0.7).sin();
+    }
+    put(&dir, "be128_q0", &state.q);
+    let dt = 1e-3;
+    let mut opts = RunOptions::new(dt, 1.0, IntegratorKind::BackwardEuler);
+    opts.newton_tolerance = 1e-8;
+    let mut stepper =
+        make_stepper_with_options(IntegratorKind::BackwardEuler, &model, &state, &opts).unwrap();
+    stepper.step(&model, &mut state, dt).unwrap();
+    put(&dir, "be128_q1", &state.q);
+    put(&dir, "be128_v1", &state.v);
+    let vmax = state.v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    println!("128 x 128, one backward-Euler step of 1e-3: max |v| = {vmax:e}");
 }

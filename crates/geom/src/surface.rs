@@ -492,18 +492,23 @@ impl NurbsSurface {
         let (p, q) = (self.basis_u.degree(), self.basis_v.degree());
         let n_v = self.n_v();
         let mut scratch = BasisScratch::default();
-        // v bases once per column.
-        let mut v_spans = Vec::with_capacity(vs.len());
-        let mut v_values = vec![0.0; vs.len() * (q + 1)];
+        // v bases once per column, stored by basis index (`nv[b · n + j]`, so that a run of
+        // columns reads each basis function's values contiguously), and the columns grouped
+        // into runs of one knot span.
+        let n = vs.len();
+        let mut runs: Vec<(usize, usize, usize)> = Vec::new(); // (first column, end, span)
+        let mut nv = vec![0.0; n * (q + 1)];
+        let mut values = vec![0.0; q + 1];
         for (j, &v) in vs.iter().enumerate() {
             let s = self.basis_v.find_span(v);
-            v_spans.push(s);
-            self.basis_v.values_into(
-                s,
-                v,
-                &mut v_values[j * (q + 1)..(j + 1) * (q + 1)],
-                &mut scratch,
-            );
+            match runs.last_mut() {
+                Some(run) if run.2 == s && run.1 == j => run.1 = j + 1,
+                _ => runs.push((j, j + 1, s)),
+            }
+            self.basis_v.values_into(s, v, &mut values, &mut scratch);
+            for (b, &value) in values.iter().enumerate() {
+                nv[b * n + j] = value;
+            }
         }
         // Homogeneous control net.
         let hw: Vec<[f64; 4]> = self
@@ -512,8 +517,8 @@ impl NurbsSurface {
             .zip(&self.weights)
             .map(|(c, &w)| [c[0] * w, c[1] * w, c[2] * w, w])
             .collect();
-        let mut out = vec![[0.0; 3]; us.len() * vs.len()];
-        out.par_chunks_mut(vs.len().max(1))
+        let mut out = vec![[0.0; 3]; us.len() * n];
+        out.par_chunks_mut(n.max(1))
             .zip(us.par_iter())
             .for_each_init(
                 || {
@@ -539,35 +544,32 @@ impl NurbsSurface {
                             c[3] += na * h[3];
                         }
                     }
-                    // Points in chunks: homogeneous sums into separate arrays, then the
-                    // divisions as plain array loops (vectorized; the same IEEE quotients).
-                    for (c0, points) in row.chunks_mut(GRID_CHUNK).enumerate() {
-                        let len = points.len();
-                        let mut h = [[0.0; GRID_CHUNK]; 4];
-                        for t in 0..len {
-                            let j = c0 * GRID_CHUNK + t;
-                            let s = v_spans[j];
-                            let nv = &v_values[j * (q + 1)..(j + 1) * (q + 1)];
-                            let mut acc = [0.0; 4];
-                            for (b, &nb) in nv.iter().enumerate() {
+                    // Within a run of one span every point combines the same q + 1 curve
+                    // coefficients, so the homogeneous sums are plain array loops over the
+                    // points of a chunk (vectorized), in the order b = 0..q of a single point,
+                    // and so are the divisions: the same IEEE results as one point at a time.
+                    for &(j0, j1, s) in &runs {
+                        for start in (j0..j1).step_by(GRID_CHUNK) {
+                            let len = GRID_CHUNK.min(j1 - start);
+                            let mut h = [[0.0; GRID_CHUNK]; 4];
+                            for b in 0..=q {
                                 let c = curve[s - q + b];
-                                acc[0] += nb * c[0];
-                                acc[1] += nb * c[1];
-                                acc[2] += nb * c[2];
-                                acc[3] += nb * c[3];
+                                let nb = &nv[b * n + start..b * n + start + len];
+                                for x in 0..4 {
+                                    for (hx, &w) in h[x][..len].iter_mut().zip(nb) {
+                                        *hx += w * c[x];
+                                    }
+                                }
                             }
-                            for x in 0..4 {
-                                h[x][t] = acc[x];
+                            let mut xyz = [[0.0; GRID_CHUNK]; 3];
+                            for x in 0..3 {
+                                for t in 0..GRID_CHUNK {
+                                    xyz[x][t] = h[x][t] / h[3][t];
+                                }
                             }
-                        }
-                        let mut xyz = [[0.0; GRID_CHUNK]; 3];
-                        for x in 0..3 {
-                            for t in 0..GRID_CHUNK {
-                                xyz[x][t] = h[x][t] / h[3][t];
+                            for (t, point) in row[start..start + len].iter_mut().enumerate() {
+                                *point = [xyz[0][t], xyz[1][t], xyz[2][t]];
                             }
-                        }
-                        for (t, point) in points.iter_mut().enumerate() {
-                            *point = [xyz[0][t], xyz[1][t], xyz[2][t]];
                         }
                     }
                 },

@@ -218,4 +218,74 @@ mod tests {
             "2-19"
         );
     }
+
+    /// The temporary names of this test's writes in progress (`.NAME.tmp-*` in `dir`).
+    fn temps(dir: &Path, name: &str) -> Vec<PathBuf> {
+        let prefix = format!(".{name}.tmp-");
+        entries(dir)
+            .into_iter()
+            .filter(|e| e.starts_with(&prefix))
+            .map(|e| dir.join(e))
+            .collect()
+    }
+
+    #[test]
+    fn the_temporary_file_lies_in_the_target_folder() {
+        // A temporary anywhere else (the working folder, say) would make the rename a copy
+        // across file systems, or fail, and leave strays where nobody looks.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("g.txt");
+        let mut seen = Vec::new();
+        write_atomic(&p, |w| {
+            seen = temps(dir.path(), "g.txt");
+            w.write_all(b"x")
+        })
+        .unwrap();
+        assert_eq!(seen.len(), 1, "{:?}", entries(dir.path()));
+        let tmp = seen[0].file_name().unwrap().to_string_lossy().into_owned();
+        assert!(
+            tmp.starts_with(&format!(".g.txt.tmp-{}-", std::process::id())),
+            "{tmp}"
+        );
+        assert!(
+            !Path::new(&tmp).exists(),
+            "a stray {tmp} in the working folder"
+        );
+    }
+
+    #[test]
+    fn parent_dir_is_the_containing_folder() {
+        assert_eq!(parent_dir(Path::new("out/a/f.csv")), PathBuf::from("out/a"));
+        assert_eq!(parent_dir(Path::new("/f.csv")), PathBuf::from("/"));
+        assert_eq!(parent_dir(Path::new("f.csv")), PathBuf::from("."));
+    }
+
+    #[test]
+    fn a_finished_write_leaves_the_pending_list() {
+        // The signal handler's list must hold only writes in progress: a finished or failed
+        // write takes its own temporary off it (and only its own).
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("h.txt");
+        let mut during = Vec::new();
+        write_atomic(&p, |w| {
+            during = temps(dir.path(), "h.txt");
+            assert!(PENDING.lock().unwrap().contains(&during[0]));
+            w.write_all(b"x")
+        })
+        .unwrap();
+        assert!(!PENDING.lock().unwrap().contains(&during[0]));
+        let r = write_atomic(&p, |_| {
+            during = temps(dir.path(), "h.txt");
+            Err(std::io::Error::other("stop"))
+        });
+        assert!(r.is_err());
+        assert!(!PENDING.lock().unwrap().contains(&during[0]));
+        // Another write's entry is left alone when one finishes.
+        let other = dir.path().join(".other.tmp-test");
+        let guard = TempGuard::new(other.clone());
+        write_atomic_bytes(&p, b"y").unwrap();
+        assert!(PENDING.lock().unwrap().contains(&other));
+        drop(guard);
+        assert!(!PENDING.lock().unwrap().contains(&other));
+    }
 }

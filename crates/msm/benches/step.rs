@@ -15,7 +15,10 @@
 //! - `msm/symplectic_euler_step_generic/256x256`: the same step by the generic path (the
 //!   model's fused step hidden: forces per node, then the update), for comparison;
 //! - `msm/backward_euler_step/128x128`: one backward-Euler step (Newton on the sparse tangent
-//!   stiffness) on a 128 × 128 lattice.
+//!   stiffness) on a 128 × 128 lattice, stepping on from the previous step's state (the
+//!   Newton factor is kept while it converges), and `msm/newton_factorization/128x128`: one
+//!   numeric Cholesky factorization of that step's Newton matrix `M + Δt² K_T`, the unit the
+//!   step is measured in, and `msm/newton_solve/128x128`: one solve with that factor.
 //!
 //! Criterion reports throughput in springs per second (the spring counts are printed first);
 //! ns per spring is its inverse.
@@ -25,7 +28,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nurbspring_geom::{KnotVector, NurbsSurface};
-use nurbspring_linalg::SparseMatrix;
+use nurbspring_linalg::{ShiftedSum, SparseMatrix, SpdSolver};
 use nurbspring_msm::{
     Class, Constants, FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringKind,
     SpringLattice,
@@ -205,6 +208,24 @@ fn implicit(c: &mut Criterion) {
     });
     group.bench_function("tangent_stiffness/128x128", |b| {
         b.iter(|| black_box(model.tangent_stiffness(black_box(&state.q))))
+    });
+    // One numeric Cholesky factorization of the step's Newton matrix J = M + Δt² K_T (symbolic
+    // analysis done once, outside): the unit issue 12 measures the step against.
+    let mass = model.mass().to_sparse();
+    let jacobian = ShiftedSum::new(&mass, dt * dt, &model.tangent_stiffness(&state.q)).unwrap();
+    let mut solver = SpdSolver::new(jacobian.matrix()).unwrap();
+    group.bench_function("newton_factorization/128x128", |b| {
+        b.iter(|| solver.refactor(black_box(jacobian.matrix())).unwrap())
+    });
+    // One solve with that factor (forward and back substitution; the right-hand side is
+    // copied in first, 0.4 MB, so that repeated solves do not grow it).
+    let rhs = vec![1.0; model.n_dofs()];
+    let mut x = rhs.clone();
+    group.bench_function("newton_solve/128x128", |b| {
+        b.iter(|| {
+            x.copy_from_slice(&rhs);
+            solver.solve_in_place(black_box(&mut x))
+        })
     });
     group.finish();
 }
