@@ -506,46 +506,60 @@ pub fn derive_msm(
     }
     let integrator = config.time.msm_integrator;
     let constants = fit.selected.constants.clone();
-    let (derived, msm_trajectory) = evaluate(
-        &setup,
-        config,
-        &judge,
-        &reference,
-        &constants,
-        mass.selected,
-        integrator,
-    )?;
-    let (given, given_trajectory) = match &config.given {
-        Some((constants, m)) => {
-            let (p, t) = evaluate(
+    let lattice = setup.lattice_with(&constants, mass.selected);
+    // The validation of the derived (and the scene's) model, the second excitation and the
+    // spectra are independent: they run in parallel (rayon's pool; each result is the same
+    // as when run alone).
+    let validations = || -> Result<_, DeriveError> {
+        let derived = evaluate(
+            &setup,
+            config,
+            &judge,
+            &reference,
+            &constants,
+            mass.selected,
+            integrator,
+        )?;
+        let given = match &config.given {
+            Some((constants, m)) => Some(evaluate(
                 &setup, config, &judge, &reference, constants, *m, integrator,
-            )?;
-            (Some(p), Some(t))
-        }
+            )?),
+            None => None,
+        };
+        Ok((derived, given))
+    };
+    // The second excitation: an impulse, no loads.
+    let second = || -> Result<Validation, DeriveError> {
+        let impulse = impulse(&setup, initial_speed(setup.dnurbs_initial()))?;
+        let impulse_reference = judge.impulse_reference(&impulse)?;
+        let mut unloaded = lattice.clone();
+        unloaded.gravity = [0.0; 3];
+        unloaded.forces.clear();
+        let nodes = setup.omega().node_state(setup.model(), &impulse);
+        let (_, dt_critical) = setup.stability(&constants, mass.selected)?;
+        let used = stable_integrator(integrator, judge.dt, dt_critical);
+        let mut opts = RunOptions::new(judge.dt, judge.horizon, used);
+        opts.force_unstable = true;
+        let impulse_run = setup.run_msm_from(unloaded, &nodes, &opts)?;
+        Ok(validation(
+            &setup,
+            &impulse_reference.0,
+            impulse_reference.1,
+            &impulse_run,
+            used.name().to_string(),
+            judge.horizon,
+            judge.dt,
+        ))
+    };
+    let (validated, (second_excitation, spectrum)) = rayon::join(validations, || {
+        rayon::join(second, || spectra(&setup, &lattice))
+    });
+    let ((derived, msm_trajectory), given) = validated?;
+    let (given, given_trajectory) = match given {
+        Some((p, t)) => (Some(p), Some(t)),
         None => (None, None),
     };
-    let lattice = setup.lattice_with(&constants, mass.selected);
-    // The second excitation: an impulse, no loads.
-    let impulse = impulse(&setup, initial_speed(setup.dnurbs_initial()))?;
-    let impulse_reference = judge.impulse_reference(&impulse)?;
-    let mut unloaded = lattice.clone();
-    unloaded.gravity = [0.0; 3];
-    unloaded.forces.clear();
-    let nodes = setup.omega().node_state(setup.model(), &impulse);
-    let used = stable_integrator(integrator, judge.dt, derived.dt_critical);
-    let mut opts = RunOptions::new(judge.dt, judge.horizon, used);
-    opts.force_unstable = true;
-    let impulse_run = setup.run_msm_from(unloaded, &nodes, &opts)?;
-    let second_excitation = validation(
-        &setup,
-        &impulse_reference.0,
-        impulse_reference.1,
-        &impulse_run,
-        used.name().to_string(),
-        judge.horizon,
-        judge.dt,
-    );
-    let spectrum = spectra(&setup, &lattice)?;
+    let (second_excitation, spectrum) = (second_excitation?, spectrum?);
     let frequencies = paper_frequencies(&spectrum);
     let mass = with_totals(mass, setup.model(), &lattice.masses, &lattice.fixed);
     let clamped: Vec<String> = fit

@@ -357,12 +357,18 @@ fn energy_series(name: &str, traj: &Trajectory) -> Vec<Series> {
     ]
 }
 
-/// central_node, mass_scan, energy and spectrum plots, SVG and PNG.
+/// One plot file to write.
+type PlotJob<'a> = Box<dyn Fn() -> Result<(), Error> + Send + Sync + 'a>;
+
+/// central_node, mass_scan, energy and spectrum plots, SVG and PNG. The eight files are
+/// independent, so they are drawn in parallel (rayon's pool); the first error in the order
+/// above is returned.
 fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Error> {
+    use rayon::prelude::*;
     let axis = main_axis(&d.dnurbs_trajectory);
     let name = ["x", "y", "z"][axis];
     let t = &d.dnurbs_trajectory.t;
-    let mut series = vec![
+    let mut central = vec![
         Series::line("D-NURBS", xy(t, &d.dnurbs_trajectory.component(0, axis))),
         Series::line(
             format!(
@@ -375,7 +381,7 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
     ];
     if let (Some(g), Some(gt)) = (&d.given, &d.given_trajectory) {
         let k = |class| g.constants.value(class);
-        series.push(Series::line(
+        central.push(Series::line(
             format!(
                 "scene's MSM k_edge={}, k_diag={}, k_bend={}, m={} ({})",
                 k(Class::Spring(SpringKind::Structural)),
@@ -387,17 +393,8 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
             xy(&gt.t, &gt.component(0, axis)),
         ));
     }
-    let title = format!("Central node {name}(t) of {scene_label}: D-NURBS vs MSM");
-    for ext in ["svg", "png"] {
-        plot(
-            &out.join(format!("central_node.{ext}")),
-            &title,
-            "t [s]",
-            &format!("{name} [m]"),
-            &series,
-            false,
-        )?;
-    }
+    let central_title = format!("Central node {name}(t) of {scene_label}: D-NURBS vs MSM");
+    let y_label = format!("{name} [m]");
     let scan: Vec<(f64, f64)> = d
         .mass
         .candidates
@@ -405,24 +402,12 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
         .filter(|c| c.rms.is_finite() && c.rms > 0.0)
         .map(|c| (c.m, c.rms))
         .collect();
-    if !scan.is_empty() {
-        let mut series = vec![Series::points("candidates", scan.clone())];
-        if let Some(chosen) = selected_point(&scan, d.mass.selected) {
-            series.push(Series::points(
-                format!("selected m = {:.6}", d.mass.selected),
-                vec![chosen],
-            ));
-        }
-        for ext in ["svg", "png"] {
-            plot(
-                &out.join(format!("mass_scan.{ext}")),
-                "Mass candidates: eigenvalues of M vs RMS error of the central node",
-                "node mass m [kg] (an eigenvalue of M)",
-                "RMS error [m]",
-                &series,
-                true,
-            )?;
-        }
+    let mut scan_series = vec![Series::points("candidates", scan.clone())];
+    if let Some(chosen) = selected_point(&scan, d.mass.selected) {
+        scan_series.push(Series::points(
+            format!("selected m = {:.6}", d.mass.selected),
+            vec![chosen],
+        ));
     }
     let energy: Vec<Series> = [
         ("D-NURBS", &d.dnurbs_trajectory),
@@ -432,34 +417,78 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
     .filter(|(_, t)| !t.energy.is_empty())
     .flat_map(|(name, t)| energy_series(name, t))
     .collect();
+    let energy_title =
+        format!("Energy over time, {scene_label}, each model relative to its own scale");
+    let spectrum_title = format!(
+        "Angular frequencies of {scene_label}: D-NURBS vs derived MSM (linearized at rest)"
+    );
+
+    let mut jobs: Vec<PlotJob<'_>> = Vec::new();
+    for ext in ["svg", "png"] {
+        let (central, central_title, y_label) = (&central, &central_title, &y_label);
+        jobs.push(Box::new(move || {
+            plot(
+                &out.join(format!("central_node.{ext}")),
+                central_title,
+                "t [s]",
+                y_label,
+                central,
+                false,
+            )
+        }));
+    }
+    if !scan.is_empty() {
+        for ext in ["svg", "png"] {
+            let scan_series = &scan_series;
+            jobs.push(Box::new(move || {
+                plot(
+                    &out.join(format!("mass_scan.{ext}")),
+                    "Mass candidates: eigenvalues of M vs RMS error of the central node",
+                    "node mass m [kg] (an eigenvalue of M)",
+                    "RMS error [m]",
+                    scan_series,
+                    true,
+                )
+            }));
+        }
+    }
     if !energy.is_empty() {
         for ext in ["svg", "png"] {
-            plot(
-                &out.join(format!("energy.{ext}")),
-                &format!("Energy over time, {scene_label}, each model relative to its own scale"),
-                "t [s]",
-                "energy / largest kinetic + elastic energy of the model",
-                &energy,
-                false,
-            )?;
+            let (energy, energy_title) = (&energy, &energy_title);
+            jobs.push(Box::new(move || {
+                plot(
+                    &out.join(format!("energy.{ext}")),
+                    energy_title,
+                    "t [s]",
+                    "energy / largest kinetic + elastic energy of the model",
+                    energy,
+                    false,
+                )
+            }));
         }
     }
     if !d.spectrum.dnurbs.is_empty() {
         for ext in ["svg", "png"] {
-            plot_spectrum(
-                out.join(format!("spectrum.{ext}")),
-                &format!(
-                    "Angular frequencies of {scene_label}: D-NURBS vs derived MSM (linearized at rest)"
-                ),
-                "omega [rad/s]",
-                &[
-                    ("D-NURBS", &d.spectrum.dnurbs),
-                    ("derived MSM", &d.spectrum.msm),
-                ],
-            )?;
+            let spectrum_title = &spectrum_title;
+            jobs.push(Box::new(move || {
+                plot_spectrum(
+                    out.join(format!("spectrum.{ext}")),
+                    spectrum_title,
+                    "omega [rad/s]",
+                    &[
+                        ("D-NURBS", &d.spectrum.dnurbs),
+                        ("derived MSM", &d.spectrum.msm),
+                    ],
+                )?;
+                Ok(())
+            }));
         }
     }
-    Ok(())
+    jobs.par_iter()
+        .map(|job| job())
+        .collect::<Vec<_>>()
+        .into_iter()
+        .collect()
 }
 
 #[cfg(test)]
