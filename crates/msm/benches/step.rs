@@ -20,8 +20,9 @@
 //!   numeric Cholesky factorization of that step's Newton matrix `M + Δt² K_T`, the unit the
 //!   step is measured in, and `msm/newton_solve/128x128`: one solve with that factor.
 //!
-//! Criterion reports throughput in springs per second (the spring counts are printed first);
-//! ns per spring is its inverse.
+//! Criterion reports the force and implicit benches' throughput in springs per second (the
+//! spring counts are printed first; ns per spring is its inverse), the fused step's and the
+//! memory benches' in bytes per second.
 
 use std::hint::black_box;
 use std::time::Duration;
