@@ -288,4 +288,21 @@ mod tests {
         drop(guard);
         assert!(!PENDING.lock().unwrap().contains(&other));
     }
+
+    #[test]
+    fn a_temporary_name_in_use_is_skipped() {
+        // A leftover temporary of an earlier process with the same pid and counter must not
+        // fail the write: the next name is tried. The next thousand names are taken here (the
+        // counter is shared with the tests running beside this one).
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("k.txt");
+        let first = COUNTER.load(Ordering::Relaxed);
+        let pid = std::process::id();
+        for n in first..first + 1000 {
+            std::fs::write(dir.path().join(format!(".k.txt.tmp-{pid}-{n}")), b"stale").unwrap();
+        }
+        write_atomic_bytes(&p, b"fresh").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"fresh");
+        assert_eq!(entries(dir.path()).len(), 1001);
+    }
 }
