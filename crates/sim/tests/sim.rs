@@ -966,3 +966,28 @@ fn modified_newton_reuses_the_factor_and_solves_every_step() {
         "Newmark: {counts:?} over {steps} steps"
     );
 }
+
+/// Every stepper advances the clock by Δt a step: `t_n = n Δt` (to the round-off of n sums),
+/// the time at which the external force of the next step is taken.
+#[test]
+fn every_stepper_advances_time_by_dt() {
+    let model = LinearModel::new(
+        SystemMatrix::Diagonal(vec![1.0, 2.0]),
+        SparseMatrix::from_diagonal(&[4.0, 9.0]),
+    );
+    let dt = 0.1;
+    for kind in IntegratorKind::ALL {
+        let mut state = State::new(vec![1.0, -0.5], vec![0.0, 0.3]);
+        state.t = 2.0;
+        let mut stepper = make_stepper(kind, &model, &state, dt).unwrap();
+        for n in 1..=7 {
+            stepper.step(&model, &mut state, dt).unwrap();
+            let expected = 2.0 + n as f64 * dt;
+            assert!(
+                (state.t - expected).abs() <= 8.0 * f64::EPSILON * expected,
+                "{kind:?} after {n} steps: t = {} (expected {expected})",
+                state.t
+            );
+        }
+    }
+}
