@@ -21,7 +21,6 @@ K_EDGE, K_DIAG = 1000.0, 500.0
 MASS = 1.0 / (N * N)
 GRAVITY = np.array([0.0, 0.0, -9.81])
 DT = 1e-5
-FIXED = [0, (N - 1) * N]
 
 
 def lattice(n=N):

@@ -126,16 +126,16 @@ class Run:
             return None
         if len(rs) == 1:
             return {"min": rs[0]["min_s"], "median": rs[0]["median_s"], "n": len(rs[0]["times_s"]),
-                    "info": rs[0]["info"], "load": [rs[0]["load"]]}
+                    "info": rs[0]["info"]}
         times = [t for r in rs for t in r["times_s"]]
         return {"min": min(times), "median": statistics.median(times), "n": len(times),
-                "info": rs[0]["info"], "load": [r["load"] for r in rs]}
+                "info": rs[0]["info"]}
 
-    def pcell(self, source, bench, scale=1.0):
+    def pcell(self, source, bench):
         p = self.peer(source, bench)
         if not p:
             return "not measured"
-        return f"{fmt_time(p['min'] * scale)} min, {fmt_time(p['median'] * scale)} median ({p['n']} runs)"
+        return f"{fmt_time(p['min'])} min, {fmt_time(p['median'])} median ({p['n']} runs)"
 
     def section(self, name):
         s = self.info.get("sections", {}).get(name)
@@ -221,13 +221,13 @@ class Run:
         head = ["| issue 12 target | nurbspring | ratio | goal | verdict |", "|---|---|---|---|---|"]
         return "\n".join(head + rows)
 
-    def binary(self, bench, stat="median"):
+    def binary(self, bench):
         bins = [k for k in self.res if k[1] == bench]
         if not bins:
             return None
         # the binary under test (BIN): the first one recorded
         p = self.peer(*bins[0])
-        return p[stat]
+        return p["median"]
 
     def binary_failed(self, bench):
         bins = [k for k in self.res if k[1] == bench]

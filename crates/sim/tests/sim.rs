@@ -1020,7 +1020,8 @@ fn linear_implicit_steps_solve_the_damped_equation_of_motion() {
         be.step(&model, &mut s, dt).unwrap();
         let a: Vec<f64> = (0..2).map(|i| (s.v[i] - v[i]) / dt).collect();
         let r = equation_of_motion_residual(&model, &s.q, &s.v, &a);
-        assert!(r < 1e-13, "backward Euler residual {r:e}");
+        // Measured: 2e-15 (backward Euler), 1e-14 (Newmark, whose a⁺ is a difference over Δt).
+        assert!(r < 2e-14, "backward Euler residual {r:e}");
     }
 
     let mut nm = Newmark::new(&model, &start, dt, newton).unwrap();
@@ -1035,7 +1036,7 @@ fn linear_implicit_steps_solve_the_damped_equation_of_motion() {
         nm.step(&model, &mut s, dt).unwrap();
         let a_new: Vec<f64> = (0..2).map(|i| 2.0 * (s.v[i] - v[i]) / dt - a[i]).collect();
         let r = equation_of_motion_residual(&model, &s.q, &s.v, &a_new);
-        assert!(r < 1e-12, "Newmark residual {r:e}");
+        assert!(r < 1e-13, "Newmark residual {r:e}");
         a = a_new;
     }
 }
