@@ -287,6 +287,18 @@ impl DynamicModel for MsmModel {
         }
     }
 
+    /// `K_T` with the geometric term of compressed springs dropped (positive semi-definite;
+    /// the linear elements are kept as they are).
+    fn projected_tangent_stiffness(&self, q: &[f64]) -> Option<SparseMatrix> {
+        self.check_len("projected_tangent_stiffness q", q.len());
+        let springs = self.assemble(q, &Coefficient::ProjectedStiffness);
+        Some(match &self.linear {
+            Some(l) => SparseMatrix::linear_combination(1.0, &springs, 1.0, l)
+                .expect("both are on the free coordinates"),
+            None => springs,
+        })
+    }
+
     /// `L_ff ⊗ I₃` when the model has no springs (docs/math.md §8).
     fn linear_stiffness(&self) -> Option<&SparseMatrix> {
         self.linear.as_ref().filter(|_| self.is_linear())

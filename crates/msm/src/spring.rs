@@ -102,12 +102,24 @@ pub(crate) fn energy(k: f64, l: f64, d: [f64; 3]) -> f64 {
 /// The 3 × 3 block `B = k [ (l/r) n nᵀ + (1 − l/r) I ]` of paper eq. (9), row-major.
 #[inline(always)]
 pub(crate) fn stiffness_block(k: f64, l: f64, d: [f64; 3]) -> [[f64; 3]; 3] {
+    stiffness_block_with(k, l, d, false)
+}
+
+/// [`stiffness_block`], or with `project` its positive semi-definite part: the geometric term
+/// `k (1 − l/r) I` of a compressed spring (`r < l`, the only indefinite part) dropped, so that
+/// `B = k [(l/r) n nᵀ + max(0, 1 − l/r) I]` (for `k ≥ 0`).
+#[inline(always)]
+pub(crate) fn stiffness_block_with(k: f64, l: f64, d: [f64; 3], project: bool) -> [[f64; 3]; 3] {
     let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
     let r = r2.sqrt();
     let ratio = l / r;
     // (l/r) n nᵀ = (l / r³) d dᵀ.
     let axial = k * ratio / r2;
-    let geometric = k * (1.0 - ratio);
+    let geometric = if project {
+        k * (1.0 - ratio).max(0.0)
+    } else {
+        k * (1.0 - ratio)
+    };
     let mut block = [[0.0; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
@@ -164,4 +176,26 @@ impl Spring {
 #[inline(always)]
 pub(crate) fn node(x: &[f64], a: usize) -> [f64; 3] {
     [x[3 * a], x[3 * a + 1], x[3 * a + 2]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stiffness_block_with;
+
+    /// A spring of k = 2, l = 1 compressed to r = 0.5 along x: by hand, the block is
+    /// `2 [2 e eᵀ − I] = diag(2, −2, −2)` (indefinite) and its projection drops `−2 I`,
+    /// leaving `diag(4, 0, 0)`; stretched to r = 2 the projection changes nothing.
+    #[test]
+    fn the_projected_block_drops_only_the_compressed_geometric_term() {
+        let exact = stiffness_block_with(2.0, 1.0, [0.5, 0.0, 0.0], false);
+        let projected = stiffness_block_with(2.0, 1.0, [0.5, 0.0, 0.0], true);
+        let diag = |b: [[f64; 3]; 3]| [b[0][0], b[1][1], b[2][2]];
+        assert_eq!(diag(exact), [2.0, -2.0, -2.0]);
+        assert_eq!(diag(projected), [4.0, 0.0, 0.0]);
+        let d = [1.2, -1.6, 0.0];
+        assert_eq!(
+            stiffness_block_with(2.0, 1.0, d, false),
+            stiffness_block_with(2.0, 1.0, d, true)
+        );
+    }
 }

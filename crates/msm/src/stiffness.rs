@@ -13,7 +13,7 @@ use nurbspring_linalg::SparseMatrix;
 use rayon::prelude::*;
 
 use crate::SpringKind;
-use crate::spring::{stiffness_block, sub};
+use crate::spring::{stiffness_block_with, sub};
 use crate::topology::Topology;
 
 /// Nodes per rayon task when filling values.
@@ -23,6 +23,9 @@ const CHUNK_NODES: usize = 1024;
 pub(crate) enum Coefficient {
     /// The spring's own `k`: the tangent stiffness `K_T`.
     Stiffness,
+    /// The spring's own `k` with the geometric term of compressed springs dropped: the
+    /// positive semi-definite part of `K_T` (see `stiffness_block_with`).
+    ProjectedStiffness,
     /// `1` for springs of this kind, `0` otherwise: the unit matrix `G_c`.
     Unit(SpringKind),
 }
@@ -114,6 +117,7 @@ impl Topology {
             "values of the block pattern expected"
         );
         let (x, _) = x.as_chunks::<3>();
+        let project = matches!(coef, Coefficient::ProjectedStiffness);
         // Split the values into chunks of whole nodes.
         let mut chunks: Vec<(usize, &mut [f64])> = Vec::with_capacity(n.div_ceil(CHUNK_NODES));
         let mut rest = values;
@@ -137,7 +141,8 @@ impl Topology {
                     let Some(k) = coef.value(k, self.spring[e], &self.kinds) else {
                         continue;
                     };
-                    let block = stiffness_block(k, l, sub(xa, x[self.other[e] as usize]));
+                    let block =
+                        stiffness_block_with(k, l, sub(xa, x[self.other[e] as usize]), project);
                     let off = 3 * pattern.slot[e] as usize;
                     add_block(v, stride, diag, &block, 1.0);
                     add_block(v, stride, off, &block, -1.0);
@@ -147,7 +152,7 @@ impl Topology {
                     let Some(k) = coef.value(k, self.spring_fixed[e], &self.kinds) else {
                         continue;
                     };
-                    let block = stiffness_block(k, l, sub(xa, self.pos_fixed[e]));
+                    let block = stiffness_block_with(k, l, sub(xa, self.pos_fixed[e]), project);
                     add_block(v, stride, diag, &block, 1.0);
                 }
             }
@@ -161,7 +166,7 @@ impl Coefficient {
     #[inline]
     fn value(&self, k: f64, spring: u32, kinds: &[SpringKind]) -> Option<f64> {
         match self {
-            Coefficient::Stiffness => Some(k),
+            Coefficient::Stiffness | Coefficient::ProjectedStiffness => Some(k),
             Coefficient::Unit(kind) => (kinds[spring as usize] == *kind).then_some(1.0),
         }
     }

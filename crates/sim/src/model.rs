@@ -110,6 +110,13 @@ pub trait DynamicModel: Sync {
     fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix;
     /// Elastic energy `E(q)` with `∇E = f_int` (external work not included).
     fn potential_energy(&self, q: &[f64]) -> f64;
+    /// A positive semi-definite approximation of `K_T(q)` on the same pattern, used by the
+    /// implicit schemes when `M + c_v D + c_q K_T` is not positive definite (a Newton step with
+    /// an indefinite matrix need not lower the step's energy and can wander). `None` (the
+    /// default): the indefinite matrix is factored by LU instead.
+    fn projected_tangent_stiffness(&self, _q: &[f64]) -> Option<SparseMatrix> {
+        None
+    }
     /// `Some(K)` when `f_int(q) = K q + f_int(0)` exactly (constant stiffness): lets implicit
     /// schemes factor once and the modal solver apply.
     fn linear_stiffness(&self) -> Option<&SparseMatrix> {

@@ -41,6 +41,17 @@ impl NewtonSolver {
 
     /// Factors `j` (Cholesky, refactoring with the stored symbolic analysis; LU if not SPD).
     pub(crate) fn factor(&mut self, j: &SparseMatrix) -> Result<(), SimError> {
+        if self.factor_spd(j)? {
+            return Ok(());
+        }
+        self.lu = Some(LuSolver::new(j)?);
+        self.use_lu = true;
+        Ok(())
+    }
+
+    /// Factors `j` by Cholesky; `false` (and nothing factored) when `j` is not positive
+    /// definite.
+    fn factor_spd(&mut self, j: &SparseMatrix) -> Result<bool, SimError> {
         let result = match &mut self.spd {
             Some(s) => s.refactor(j),
             None => SpdSolver::new(j).map(|s| {
@@ -50,13 +61,9 @@ impl NewtonSolver {
         match result {
             Ok(()) => {
                 self.use_lu = false;
-                Ok(())
+                Ok(true)
             }
-            Err(LinalgError::NotPositiveDefinite { .. }) => {
-                self.lu = Some(LuSolver::new(j)?);
-                self.use_lu = true;
-                Ok(())
-            }
+            Err(LinalgError::NotPositiveDefinite { .. }) => Ok(false),
             Err(e) => Err(e.into()),
         }
     }
@@ -163,7 +170,10 @@ impl ImplicitCore {
         })
     }
 
-    /// Factors `J = M + c_v D + c_q K_T(q)` at the trial point `q`.
+    /// Factors `J = M + c_v D + c_q K_T(q)` at the trial point `q`. When J is not positive
+    /// definite (compressed springs), the model's positive semi-definite tangent takes the
+    /// place of `K_T` where it has one, so the step is a descent direction of the step's
+    /// energy; otherwise J is factored by LU.
     fn refresh_factor(&mut self, model: &dyn DynamicModel) -> Result<(), SimError> {
         let kt = model.tangent_stiffness(&self.q_trial);
         let j = match &mut self.jacobian {
@@ -173,7 +183,13 @@ impl ImplicitCore {
                 .insert(ShiftedSum::new(&self.constant, self.cq, &kt)?)
                 .matrix(),
         };
-        self.solver.factor(j)?;
+        if !self.solver.factor_spd(j)? {
+            let plan = self.jacobian.as_mut().expect("set above");
+            match model.projected_tangent_stiffness(&self.q_trial) {
+                Some(kp) => self.solver.factor(plan.update(self.cq, &kp)?)?,
+                None => self.solver.factor(plan.matrix())?,
+            }
+        }
         self.factored = true;
         self.counts.factorizations += 1;
         Ok(())
