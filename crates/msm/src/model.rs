@@ -219,6 +219,16 @@ impl MsmModel {
         k
     }
 
+    /// The springs' blocks with `coef` plus the linear elements.
+    fn tangent(&self, q: &[f64], coef: &Coefficient) -> SparseMatrix {
+        match &self.linear {
+            Some(l) if self.is_linear() => l.clone(),
+            Some(l) => SparseMatrix::linear_combination(1.0, &self.assemble(q, coef), 1.0, l)
+                .expect("both are on the free coordinates"),
+            None => self.assemble(q, coef),
+        }
+    }
+
     fn check_len(&self, what: &str, len: usize) {
         let n = self.q0.len();
         assert_eq!(len, n, "{what}: expected {n} free coordinates, got {len}");
@@ -274,29 +284,14 @@ impl DynamicModel for MsmModel {
     /// included), always with the same pattern.
     fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
         self.check_len("tangent_stiffness q", q.len());
-        match &self.linear {
-            Some(l) if self.is_linear() => l.clone(),
-            Some(l) => SparseMatrix::linear_combination(
-                1.0,
-                &self.assemble(q, &Coefficient::Stiffness),
-                1.0,
-                l,
-            )
-            .expect("both are on the free coordinates"),
-            None => self.assemble(q, &Coefficient::Stiffness),
-        }
+        self.tangent(q, &Coefficient::Stiffness)
     }
 
     /// `K_T` with the geometric term of compressed springs dropped (positive semi-definite;
     /// the linear elements are kept as they are).
     fn projected_tangent_stiffness(&self, q: &[f64]) -> Option<SparseMatrix> {
         self.check_len("projected_tangent_stiffness q", q.len());
-        let springs = self.assemble(q, &Coefficient::ProjectedStiffness);
-        Some(match &self.linear {
-            Some(l) => SparseMatrix::linear_combination(1.0, &springs, 1.0, l)
-                .expect("both are on the free coordinates"),
-            None => springs,
-        })
+        Some(self.tangent(q, &Coefficient::ProjectedStiffness))
     }
 
     /// `L_ff ⊗ I₃` when the model has no springs (docs/math.md §8).

@@ -15,8 +15,10 @@
 //! factor converges in one or two solves a step. J lives on one pattern
 //! ([`ShiftedSum`]: `M + c_v D` and the tangent's pattern merged once, values refilled in
 //! place); its factorization is sparse Cholesky ([`SpdSolver`], symbolic analysis once) while
-//! J is positive definite and a sparse LU ([`LuSolver`]) when Cholesky fails — compressed
-//! springs make `K_T` indefinite.
+//! J is positive definite. When Cholesky fails (compressed springs make `K_T` indefinite), the
+//! model's positive semi-definite tangent ([`DynamicModel::projected_tangent_stiffness`])
+//! takes the place of `K_T`, so the step still lowers the step's energy; a model without one
+//! is factored by sparse LU ([`LuSolver`]).
 
 use nurbspring_linalg::{LinalgError, LuSolver, ShiftedSum, SparseMatrix, SpdSolver};
 
