@@ -393,6 +393,7 @@ fn run_dict<'py>(py: Python<'py>, run: &Simulated) -> PyResult<Bound<'py, PyDict
         f64_bytes(py, traj.energy.iter().map(|e| e[0] + e[1] + e[2])),
     )?;
     out.set_item("integrator", run.integrator.to_string())?;
+    out.set_item("substeps", run.substeps)?;
     out.set_item("dt", run.dt)?;
     out.set_item("t_end", run.t_end)?;
     out.set_item("stopped", traj.stopped.clone())?;

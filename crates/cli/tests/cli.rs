@@ -361,7 +361,7 @@ fn simulate_msm_explicit_above_limit_is_refused_then_forced() {
 /// Out of the box the paper scene's MSM run (symplectic Euler at Δt = 0.08 > Δt_crit) falls
 /// back to newmark with one warning line; the summary's Δt_crit is `stability`'s.
 #[test]
-fn simulate_msm_above_the_limit_falls_back_to_newmark_with_a_warning() {
+fn simulate_msm_above_the_limit_runs_substeps_with_a_warning() {
     let dir = tempfile::tempdir().unwrap();
     let out = bin()
         .arg("simulate")
@@ -372,7 +372,7 @@ fn simulate_msm_above_the_limit_falls_back_to_newmark_with_a_warning() {
         .success();
     let v = json_of(&out.get_output().stdout);
     assert_eq!(v["model"], "msm");
-    assert_eq!(v["integrator"], "newmark");
+    assert_eq!(v["integrator"], "symplectic-euler");
     assert_eq!(v["dt"], 0.08);
     assert_eq!(v["steps"], 10);
     assert_eq!(v["samples"], 11);
@@ -389,26 +389,101 @@ fn simulate_msm_above_the_limit_falls_back_to_newmark_with_a_warning() {
     assert_eq!(v["dt_critical"], stability["dt_critical"]);
     let dt_critical = v["dt_critical"].as_f64().unwrap();
     assert!(dt_critical < 0.08, "{dt_critical}");
+    // The substep is below the limit at rest (the uniform limit is at most that one).
+    let n = v["substeps"].as_u64().unwrap() as usize;
+    let h = 0.08 / n as f64;
+    assert!(
+        n >= 2 && h < dt_critical,
+        "{n} substeps of {h} against {dt_critical}"
+    );
     let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(
         stderr.starts_with("warning: symplectic-euler is unstable at dt = 0.08 s")
             && stderr.contains(&format!("{dt_critical:.4e}"))
-            && stderr.contains("running newmark instead"),
+            && stderr.contains(&format!("running it in {n} substeps of dt/{n}")),
         "{stderr}"
     );
     assert_eq!(
         v["warnings"][0].as_str().unwrap(),
         stderr["warning: ".len()..].trim_end()
     );
-    // Newmark conserves the undamped, unloaded lattice's energy closely; no load potential.
+    // The substeps are plain steps of dt/n: the run asked for at that step gives the same
+    // states at every n-th sample.
+    let plain = tempfile::tempdir().unwrap();
+    bin()
+        .arg("simulate")
+        .arg(paper())
+        .args([
+            "--model",
+            "msm",
+            "--integrator",
+            "symplectic-euler",
+            "--t-end",
+            "0.8",
+        ])
+        .args(["--dt", &format!("{h}"), "--out"])
+        .arg(plain.path())
+        .assert()
+        .success();
+    let (rows, plain_rows) = (trajectory_rows(dir.path()), trajectory_rows(plain.path()));
+    assert_eq!(plain_rows.len(), 10 * n + 1);
+    for (k, row) in rows.iter().enumerate() {
+        let other = &plain_rows[k * n];
+        assert!(
+            (row[0] - other[0]).abs() <= 1e-15,
+            "t {} vs {}",
+            row[0],
+            other[0]
+        );
+        assert_eq!(row[1..], other[1..], "sample {k}");
+    }
+    // No load potential; the total is the sum of its parts.
+    for r in &energy_rows(dir.path()) {
+        assert_eq!(r[3], 0.0);
+        assert!((r[4] - (r[1] + r[2] + r[3])).abs() <= 1e-15 * r[4], "{r:?}");
+    }
+}
+
+#[test]
+fn simulate_msm_falls_back_to_newmark_when_substeps_would_be_too_many() {
+    // At dt = 200 s the paper's lattice (dt_critical 0.046 s) would need more than 4096
+    // substeps a step: the implicit scheme runs instead, with a warning.
+    let dir = tempfile::tempdir().unwrap();
+    let out = bin()
+        .arg("simulate")
+        .arg(paper())
+        .args([
+            "--model", "msm", "--dt", "200", "--t-end", "400", "--json", "--out",
+        ])
+        .arg(dir.path())
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    assert_eq!(v["integrator"], "newmark");
+    assert_eq!(v["substeps"], 1);
+    assert_eq!(v["steps"], 2);
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        stderr.starts_with("warning: symplectic-euler is unstable at dt = 200 s")
+            && stderr.contains("running newmark instead"),
+        "{stderr}"
+    );
+    // Newmark conserves the undamped, unloaded lattice's energy closely.
     let rows = energy_rows(dir.path());
     let e0 = rows[0][4];
     for r in &rows {
-        assert_eq!(r[3], 0.0);
-        assert!((r[4] - (r[1] + r[2] + r[3])).abs() <= 1e-15 * e0, "{r:?}");
         assert!((r[4] - e0).abs() <= 1e-2 * e0, "{r:?} vs {e0}");
     }
+}
+
+/// The rows of `trajectory.csv` (t, then x, y, z of each probe).
+fn trajectory_rows(dir: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(dir.join("trajectory.csv")).unwrap();
+    text.lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap()).collect())
+        .collect()
 }
 
 /// The rows of `energy.csv` after checking its header.

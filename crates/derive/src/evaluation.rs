@@ -118,6 +118,7 @@ pub fn validation(
     kind: ReferenceKind,
     msm: &Trajectory,
     integrator: String,
+    substeps: usize,
     horizon: f64,
     dt: f64,
 ) -> Validation {
@@ -145,6 +146,7 @@ pub fn validation(
     let or_inf = |x: f64| if complete { x } else { f64::INFINITY };
     Validation {
         integrator,
+        substeps,
         reference: kind,
         horizon,
         dt,

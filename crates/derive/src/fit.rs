@@ -54,9 +54,17 @@ pub struct StiffnessFit {
     gram: DenseMatrix,
     rhs: Vec<f64>,
     k_d_norm: f64,
-    /// `‖K_D‖₂`, computed on first use (the spectral fit evaluates its residual hundreds of
-    /// times).
-    k_d_spectral_norm: std::sync::OnceLock<f64>,
+    /// `‖K_D‖₂` and the dense `H_c` and `K_D`, made on first use: the spectral fit evaluates
+    /// its residual hundreds of times.
+    spectral: std::sync::OnceLock<SpectralForm>,
+}
+
+/// The dense form of the fit for spectral norms.
+#[derive(Clone, Debug)]
+struct SpectralForm {
+    h: Vec<DenseMatrix>,
+    k_d: DenseMatrix,
+    k_d_norm: f64,
 }
 
 /// Outcome of the trust-region iteration.
@@ -131,7 +139,7 @@ impl StiffnessFit {
             gram,
             rhs,
             k_d_norm,
-            k_d_spectral_norm: std::sync::OnceLock::new(),
+            spectral: std::sync::OnceLock::new(),
         };
         fit.check_identifiable()?;
         Ok(fit)
@@ -358,16 +366,29 @@ impl StiffnessFit {
     /// `‖Ωᵀ K_S(k) Ω − K_D‖₂ / ‖K_D‖₂` with the spectral norm (largest |eigenvalue| of the
     /// symmetric residual), the other reading of the paper's `‖·‖₂²` in eq. (15).
     pub fn relative_spectral_residual(&self, k: &[f64]) -> Result<f64, DeriveError> {
-        let diff = SparseMatrix::linear_combination(1.0, &self.model_matrix(k)?, -1.0, &self.k_d)?;
-        let k_d_norm = match self.k_d_spectral_norm.get() {
-            Some(&n) => n,
+        let form = match self.spectral.get() {
+            Some(form) => form,
             None => {
-                let n = spectral_norm(&self.k_d)?;
-                let _ = self.k_d_spectral_norm.set(n);
-                n
+                let k_d = self.k_d.to_dense();
+                let form = SpectralForm {
+                    h: self.h.iter().map(SparseMatrix::to_dense).collect(),
+                    k_d_norm: spectral_norm(&k_d)?,
+                    k_d,
+                };
+                self.spectral.get_or_init(|| form)
             }
         };
-        Ok(spectral_norm(&diff)? / k_d_norm.max(f64::MIN_POSITIVE))
+        // Σ k_c H_c − K_D, summed in the order of `model_matrix` then the difference.
+        let mut diff = DenseMatrix::zeros(self.k_d.nrows(), self.k_d.ncols());
+        for (hc, &kc) in form.h.iter().zip(k) {
+            for (d, &h) in diff.data_mut().iter_mut().zip(hc.data()) {
+                *d += kc * h;
+            }
+        }
+        for (d, &t) in diff.data_mut().iter_mut().zip(form.k_d.data()) {
+            *d -= t;
+        }
+        Ok(spectral_norm(&diff)? / form.k_d_norm.max(f64::MIN_POSITIVE))
     }
 
     /// Minimizes the spectral-norm residual (convex but not smooth) by Nelder–Mead from the
@@ -392,9 +413,9 @@ impl StiffnessFit {
     }
 }
 
-/// Largest |eigenvalue| of a symmetric sparse matrix (dense eigenvalues).
-fn spectral_norm(a: &SparseMatrix) -> Result<f64, DeriveError> {
-    let values = symmetric_eigenvalues(&a.to_dense())?;
+/// Largest |eigenvalue| of a symmetric matrix.
+fn spectral_norm(a: &DenseMatrix) -> Result<f64, DeriveError> {
+    let values = symmetric_eigenvalues(a)?;
     Ok(values.iter().map(|x| x.abs()).fold(0.0, f64::max))
 }
 

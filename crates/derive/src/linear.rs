@@ -451,6 +451,7 @@ pub fn derive_linear(
         reference.1,
         &msm_trajectory,
         run_name(reference.1),
+        1,
         judge.horizon,
         judge.dt,
     );
@@ -470,6 +471,7 @@ pub fn derive_linear(
         kick_reference.1,
         &kick_run,
         run_name(kick_reference.1),
+        1,
         judge.horizon,
         judge.dt,
     );

@@ -24,6 +24,8 @@ pub struct MassCandidate {
     pub max_abs: f64,
     /// Integrator used for this candidate.
     pub integrator: IntegratorKind,
+    /// Its steps per Δt (more than 1: an explicit scheme kept below its stability limit).
+    pub substeps: usize,
     /// Why the run stopped early, if it did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
@@ -75,6 +77,9 @@ pub struct ProbeError {
 pub struct Validation {
     /// How the MSM was run: an integrator's name, or `modal` (its exact solution).
     pub integrator: String,
+    /// Steps of the integrator per sampling step (more than 1: an explicit scheme kept below
+    /// its stability limit).
+    pub substeps: usize,
     /// How the D-NURBS reference was computed.
     pub reference: ReferenceKind,
     /// Length of the comparison [s].

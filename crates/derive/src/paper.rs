@@ -9,7 +9,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use nurbspring_dnurbs::{Geometry, RestShape};
 use nurbspring_geom::NurbsSurface;
 use nurbspring_msm::{Class, Constants, SpringKind};
-use nurbspring_sim::IntegratorKind;
+use nurbspring_sim::{IntegratorKind, Schedule};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::DeriveError;
@@ -330,36 +331,41 @@ fn with_net(base: &Config, net: ControlNet) -> Result<Config, DeriveError> {
 
 /// Every reading of eq. (15) on one net.
 fn fit_readings(setup: &Setup, net: ControlNet) -> Result<Vec<FitReading>, DeriveError> {
-    let mut out = Vec::new();
     let paper = paper_constants();
-    for dofs in [FitDofs::All, FitDofs::Free] {
-        let fit = setup.fit(dofs)?;
-        let paper_k = paper.values_of(fit.classes());
-        let at_paper = fit.relative_residual(&paper_k)?;
-        for nonnegative in [false, true] {
+    // The two dof selections are independent: they run in parallel, in this order.
+    let per_dofs = [FitDofs::All, FitDofs::Free]
+        .par_iter()
+        .map(|&dofs| -> Result<Vec<FitReading>, DeriveError> {
+            let mut out = Vec::new();
+            let fit = setup.fit(dofs)?;
+            let paper_k = paper.values_of(fit.classes());
+            let at_paper = fit.relative_residual(&paper_k)?;
+            for nonnegative in [false, true] {
+                out.push(FitReading {
+                    net,
+                    dofs,
+                    nonnegative,
+                    norm: Norm::Frobenius,
+                    result: setup.solve(dofs, nonnegative)?,
+                    residual_at_paper_values: at_paper,
+                });
+            }
+            let (k, residual) = fit.solve_spectral()?;
             out.push(FitReading {
                 net,
                 dofs,
-                nonnegative,
-                norm: Norm::Frobenius,
-                result: setup.solve(dofs, nonnegative)?,
-                residual_at_paper_values: at_paper,
+                nonnegative: false,
+                norm: Norm::Spectral,
+                result: FitResult {
+                    constants: fit.constants(&k),
+                    relative_residual: residual,
+                },
+                residual_at_paper_values: fit.relative_spectral_residual(&paper_k)?,
             });
-        }
-        let (k, residual) = fit.solve_spectral()?;
-        out.push(FitReading {
-            net,
-            dofs,
-            nonnegative: false,
-            norm: Norm::Spectral,
-            result: FitResult {
-                constants: fit.constants(&k),
-                relative_residual: residual,
-            },
-            residual_at_paper_values: fit.relative_spectral_residual(&paper_k)?,
-        });
-    }
-    Ok(out)
+            Ok(out)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(per_dofs.into_iter().flatten().collect())
 }
 
 /// The eigenvalue of each mass matrix nearest to the paper's mass.
@@ -428,7 +434,7 @@ fn dynamics_readings(
             for integrator in [explicit, IntegratorKind::Newmark] {
                 let traj = setup.run_msm(
                     setup.lattice_with(constants, m),
-                    integrator,
+                    (Schedule::plain(integrator), None),
                     config.time.dt,
                     t_end,
                     true,
@@ -526,53 +532,71 @@ pub fn reproduce_cancellable(
     cancel: Option<Arc<AtomicBool>>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Derivation, PaperReport), DeriveError> {
+    let (main, main_setup) = derive_msm(base, cancel.clone(), progress)?;
+    let report = readings(base, &main, &main_setup, cancel)?;
+    Ok((main, report))
+}
+
+/// The second half of [`reproduce_cancellable`]: every reading of the paper's experiment
+/// around the main derivation `main` (of [`derive_msm`] on `base`, with its setup), so that
+/// a caller can write `main`'s files while they run.
+pub fn readings(
+    base: &Config,
+    main: &Derivation,
+    main_setup: &Setup,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<PaperReport, DeriveError> {
     let cancelled = || -> Result<(), DeriveError> {
         match &cancel {
             Some(c) if c.load(Ordering::Relaxed) => Err(DeriveError::Cancelled),
             _ => Ok(()),
         }
     };
-    let (main, main_setup) = derive_msm(base, cancel.clone(), progress)?;
-    let mut fits = Vec::new();
-    for net in ControlNet::ALL {
-        cancelled()?;
-        fits.extend(fit_readings(&Setup::new(&with_net(base, net)?)?, net)?);
-    }
-    let mass_nearest = nearest_eigenvalues(&main);
+    cancelled()?;
     let selected = main
         .paper_fit()
         .map(|f| f.selected.constants.clone())
         .unwrap_or_default();
-    let mut dynamics = Vec::new();
-    for net in ControlNet::ALL {
-        for rest in [RestShape::Initial, RestShape::Zero] {
-            cancelled()?;
-            dynamics.extend(dynamics_readings(
-                base,
-                net,
-                rest,
-                (&selected, main.mass.selected),
-            )?);
-        }
-    }
+    // The readings are independent of each other: the fits of both nets, the side-by-side
+    // runs and the default derivation run in parallel (rayon's pool; each result is the same
+    // as when run alone, and the lists keep their order).
+    let fits = || -> Result<Vec<FitReading>, DeriveError> {
+        let per_net = ControlNet::ALL
+            .par_iter()
+            .map(|&net| fit_readings(&Setup::new(&with_net(base, net)?)?, net))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(per_net.into_iter().flatten().collect())
+    };
+    let dynamics = || -> Result<Vec<DynamicsReading>, DeriveError> {
+        let cases: Vec<(ControlNet, RestShape)> = ControlNet::ALL
+            .into_iter()
+            .flat_map(|net| [RestShape::Initial, RestShape::Zero].map(|rest| (net, rest)))
+            .collect();
+        let per_case = cases
+            .par_iter()
+            .map(|&(net, rest)| dynamics_readings(base, net, rest, (&selected, main.mass.selected)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(per_case.into_iter().flatten().collect())
+    };
+    let ((fits, dynamics), beyond) =
+        rayon::join(|| rayon::join(fits, dynamics), || beyond(base, main));
+    let (fits, dynamics, beyond) = (fits?, dynamics?, beyond?);
+    cancelled()?;
+    let mass_nearest = nearest_eigenvalues(main);
     let lattice = LatticeFacts {
-        normal_stiffness_share: normal_stiffness_share(&main_setup)?,
+        normal_stiffness_share: normal_stiffness_share(main_setup)?,
         msm_zero_frequencies: main.spectrum.msm.iter().filter(|&&w| w == 0.0).count(),
         msm_frequencies: main.spectrum.msm.len(),
     };
-    let verdicts = verdicts(base, &main, &fits, &mass_nearest, &dynamics, &lattice);
-    let beyond = beyond(base, &main)?;
-    Ok((
-        main,
-        PaperReport {
-            fits,
-            mass_nearest,
-            dynamics,
-            lattice,
-            verdicts,
-            beyond,
-        },
-    ))
+    let verdicts = verdicts(base, main, &fits, &mass_nearest, &dynamics, &lattice);
+    Ok(PaperReport {
+        fits,
+        mass_nearest,
+        dynamics,
+        lattice,
+        verdicts,
+        beyond,
+    })
 }
 
 fn grade(relative_difference: f64) -> Verdict {

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use nurbspring_dnurbs::{DnurbsModel, Loads};
 use nurbspring_msm::{Class, Constants, MsmModel, SpringLattice};
-use nurbspring_sim::{DynamicModel, IntegratorKind, RunOptions, State};
+use nurbspring_sim::{DynamicModel, IntegratorKind, RunOptions, Schedule, StabilityLimit, State};
 
 use crate::DeriveError;
 use crate::evaluation::{
@@ -160,16 +160,6 @@ pub fn reference_run(
     )
 }
 
-/// The integrator to use for a candidate: the scene's, unless it is explicit and Δt is above
-/// its stability limit, in which case Newmark (implicit, energy conserving) is used instead.
-fn stable_integrator(requested: IntegratorKind, dt: f64, dt_critical: f64) -> IntegratorKind {
-    if requested.is_explicit() && dt >= dt_critical {
-        IntegratorKind::Newmark
-    } else {
-        requested
-    }
-}
-
 /// Step 3, the mass of Section III: the distinct non-null eigenvalues of M, and unless the
 /// scene fixes the mass, the candidate loop (each candidate simulated and compared with the
 /// D-NURBS on the central node's z; the smallest RMS among the runs that finished wins).
@@ -223,7 +213,9 @@ pub fn mass_step(
 }
 
 /// The candidate loop: simulates the MSM with `m = λ` for each candidate. Each run uses the
-/// scene's integrator when it is stable at Δt, Newmark otherwise (recorded per candidate).
+/// scene's integrator, in substeps when it is explicit and Δt is above its stability limit
+/// (Newmark when that would take more than [`nurbspring_sim::MAX_SUBSTEPS`]; recorded per
+/// candidate, [`Setup::schedule`]).
 /// The candidates are independent, so they run in parallel (rayon's pool; the results do not
 /// depend on the order); `progress` is called on the calling thread as runs finish.
 fn mass_candidates(
@@ -241,11 +233,11 @@ fn mass_candidates(
         if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
             return Err(DeriveError::Cancelled);
         }
-        let (_, dt_crit) = setup.stability(constants, m)?;
-        let integrator = stable_integrator(config.time.msm_integrator, config.time.dt, dt_crit);
+        let (schedule, limit) =
+            setup.schedule(constants, m, config.time.msm_integrator, config.time.dt)?;
         let traj = setup.run_msm(
             setup.lattice_with(constants, m),
-            integrator,
+            (schedule, limit),
             config.time.dt,
             config.time.t_end,
             false,
@@ -257,7 +249,8 @@ fn mass_candidates(
             m,
             rms: if complete { c.rms } else { f64::INFINITY },
             max_abs: if complete { c.max_abs } else { f64::INFINITY },
-            integrator,
+            integrator: schedule.integrator,
+            substeps: schedule.substeps,
             stopped: traj.stopped.clone(),
         })
     };
@@ -381,9 +374,11 @@ impl<'a> Judge<'a> {
 
 /// Step 4, a parameter set evaluated: stability, residuals, and the 3-D comparison of the
 /// probes with the D-NURBS reference over the validation horizon. The MSM runs with
-/// `integrator` when it is stable at the scene's Δt, Newmark otherwise; in that case the
-/// requested explicit run is also made (forced past its limit) and reported in
-/// `explicit_run`, to show what it does.
+/// `integrator` when it is stable at the sampling step, in substeps below its stability limit
+/// when it is explicit and the step is above it (Newmark when that would take more than
+/// [`nurbspring_sim::MAX_SUBSTEPS`]; [`Setup::schedule`]); in that case the requested explicit
+/// run with plain steps is also made (forced past its limit) and reported in `explicit_run`,
+/// to show what it does.
 pub fn evaluate(
     setup: &Setup,
     config: &Config,
@@ -394,12 +389,12 @@ pub fn evaluate(
     integrator: IntegratorKind,
 ) -> Result<(ParameterSet, Trajectory), DeriveError> {
     let (omega_max, dt_critical) = setup.stability(constants, m)?;
+    let (used, limit) = setup.schedule(constants, m, integrator, judge.dt)?;
     let (res_all, res_free) = setup.residuals_at(constants)?;
-    let used = stable_integrator(integrator, config.time.dt, dt_critical);
-    let run = |kind: IntegratorKind| -> Result<(Validation, Trajectory), DeriveError> {
+    let run = |(schedule, limit): (Schedule, Option<StabilityLimit>)| {
         let traj = setup.run_msm(
             setup.lattice_with(constants, m),
-            kind,
+            (schedule, limit),
             judge.dt,
             judge.horizon,
             true,
@@ -410,15 +405,16 @@ pub fn evaluate(
             &reference.0,
             reference.1,
             &traj,
-            kind.name().to_string(),
+            schedule.integrator.name().to_string(),
+            schedule.substeps,
             judge.horizon,
             judge.dt,
         );
-        Ok((v, traj))
+        Ok::<_, DeriveError>((v, traj))
     };
-    let (validation, traj) = run(used)?;
-    let explicit_run = if used != integrator {
-        Some(run(integrator)?.0)
+    let (validation, traj) = run((used, limit))?;
+    let explicit_run = if !used.is_plain(integrator) {
+        Some(run((Schedule::plain(integrator), None))?.0)
     } else {
         None
     };
@@ -536,9 +532,8 @@ pub fn derive_msm(
         unloaded.gravity = [0.0; 3];
         unloaded.forces.clear();
         let nodes = setup.omega().node_state(setup.model(), &impulse);
-        let (_, dt_critical) = setup.stability(&constants, mass.selected)?;
-        let used = stable_integrator(integrator, judge.dt, dt_critical);
-        let mut opts = RunOptions::new(judge.dt, judge.horizon, used);
+        let (used, limit) = setup.schedule(&constants, mass.selected, integrator, judge.dt)?;
+        let mut opts = RunOptions::scheduled(judge.dt, judge.horizon, used, limit);
         opts.force_unstable = true;
         let impulse_run = setup.run_msm_from(unloaded, &nodes, &opts)?;
         Ok(validation(
@@ -546,7 +541,8 @@ pub fn derive_msm(
             &impulse_reference.0,
             impulse_reference.1,
             &impulse_run,
-            used.name().to_string(),
+            used.integrator.name().to_string(),
+            used.substeps,
             judge.horizon,
             judge.dt,
         ))

@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material};
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_msm::{Class, Constants, LatticeOptions, MsmModel, SpringLattice};
-use nurbspring_sim::{IntegratorKind, RunOptions, State};
+use nurbspring_sim::{IntegratorKind, RunOptions, Schedule, StabilityLimit, State};
 use serde::{Deserialize, Serialize};
 
 use crate::fit::{FitDofs, FitResult, StiffnessFit};
@@ -368,6 +368,25 @@ impl Setup {
         Ok((s.omega_max, s.dt_critical))
     }
 
+    /// The stable way to run the MSM with these parameters with `requested` at Δt, and the
+    /// stability limit that holds for that run ([`Schedule::stable`]: an explicit scheme in
+    /// substeps below the lattice's uniform limit).
+    pub fn schedule(
+        &self,
+        constants: &Constants,
+        m: f64,
+        requested: IntegratorKind,
+        dt: f64,
+    ) -> Result<(Schedule, Option<StabilityLimit>), DeriveError> {
+        let model = MsmModel::new(self.lattice_with(constants, m))?;
+        Ok(Schedule::stable(
+            &model,
+            model.initial_positions(),
+            requested,
+            dt,
+        )?)
+    }
+
     /// Runs the D-NURBS model from the scene's initial state, recording the probes.
     pub fn run_dnurbs(
         &self,
@@ -390,13 +409,13 @@ impl Setup {
     pub fn run_msm(
         &self,
         lattice: SpringLattice,
-        integrator: IntegratorKind,
+        (schedule, stability): (Schedule, Option<StabilityLimit>),
         dt: f64,
         t_end: f64,
         force_unstable: bool,
         cancel: Option<Arc<AtomicBool>>,
     ) -> Result<Trajectory, DeriveError> {
-        let mut opts = RunOptions::new(dt, t_end, integrator);
+        let mut opts = RunOptions::scheduled(dt, t_end, schedule, stability);
         opts.force_unstable = force_unstable;
         opts.cancel = cancel;
         self.run_msm_from(lattice, &self.nodes, &opts)

@@ -641,6 +641,58 @@ impl SparseMatrix {
         }
     }
 
+    /// The `S` with `self = S ⊗ I_d` exactly ([`SparseMatrix::kron_identity`]'s inverse):
+    /// every non-zero `(d·i + a, d·j + b)` has `a = b` and the same value for every `a`.
+    /// `None` when `self` has no such form (stored zeros are ignored).
+    pub fn kron_identity_factor(&self, d: usize) -> Option<Self> {
+        if d == 0 || !self.nrows.is_multiple_of(d) || !self.ncols.is_multiple_of(d) {
+            return None;
+        }
+        let (n, m) = (self.nrows / d, self.ncols / d);
+        // S from the columns of the first copy (a = 0).
+        let mut col_ptr = Vec::with_capacity(m + 1);
+        let mut row_idx = Vec::new();
+        let mut values = Vec::new();
+        col_ptr.push(0);
+        for j in 0..m {
+            let c = d * j;
+            for k in self.col_ptr[c]..self.col_ptr[c + 1] {
+                let (r, v) = (self.row_idx[k], self.values[k]);
+                if v == 0.0 {
+                    continue;
+                }
+                if r % d != 0 {
+                    return None;
+                }
+                row_idx.push(r / d);
+                values.push(v);
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let factor = Self {
+            nrows: n,
+            ncols: m,
+            col_ptr,
+            row_idx,
+            values,
+        };
+        // Every non-zero of self must be a copy, and there must be d copies of each.
+        let mut count = 0;
+        for c in 0..self.ncols {
+            for k in self.col_ptr[c]..self.col_ptr[c + 1] {
+                let (r, v) = (self.row_idx[k], self.values[k]);
+                if v == 0.0 {
+                    continue;
+                }
+                if r % d != c % d || factor.get(r / d, c / d) != v {
+                    return None;
+                }
+                count += 1;
+            }
+        }
+        (count == d * factor.nnz()).then_some(factor)
+    }
+
     /// The main diagonal (length `min(nrows, ncols)`), zeros where not stored.
     pub fn diagonal(&self) -> Vec<f64> {
         (0..self.nrows.min(self.ncols))

@@ -122,6 +122,55 @@ fn sparse_operations_match_dense() {
 }
 
 #[test]
+fn kron_identity_factor_inverts_kron_identity_and_refuses_other_forms() {
+    let s = SparseMatrix::from_triplets(
+        3,
+        3,
+        &[
+            (0, 0, 2.0),
+            (0, 2, -1.0),
+            (1, 1, 3.0),
+            (2, 0, -1.0),
+            (2, 2, 4.0),
+        ],
+    )
+    .unwrap();
+    for d in 1..=4 {
+        assert_eq!(
+            s.kron_identity(d).kron_identity_factor(d),
+            Some(s.clone()),
+            "d = {d}"
+        );
+    }
+    let k = s.kron_identity(3);
+    // A coupling between two coordinates (a ≠ b) is not of the form S ⊗ I₃.
+    let mut coupled = k.to_dense();
+    coupled[(1, 0)] = 0.5;
+    assert_eq!(
+        SparseMatrix::from_dense(&coupled, 0.0).kron_identity_factor(3),
+        None
+    );
+    // Copies that differ (the z copy of S_00 changed) are not either.
+    let mut differing = k.to_dense();
+    differing[(2, 2)] = 2.5;
+    assert_eq!(
+        SparseMatrix::from_dense(&differing, 0.0).kron_identity_factor(3),
+        None
+    );
+    // A copy missing from one coordinate.
+    let mut missing = k.to_dense();
+    missing[(2, 8)] = 0.0;
+    missing[(8, 2)] = 0.0;
+    assert_eq!(
+        SparseMatrix::from_dense(&missing, 0.0).kron_identity_factor(3),
+        None
+    );
+    // Sizes that are not multiples of d.
+    assert_eq!(k.kron_identity_factor(2), None);
+    assert_eq!(k.kron_identity_factor(0), None);
+}
+
+#[test]
 fn kron_identity_quadratic_form_and_symmetry_match_dense() {
     let s = SparseMatrix::from_triplets(
         3,

@@ -294,6 +294,14 @@ impl DynamicModel for MsmModel {
         Some(self.tangent(q, &Coefficient::ProjectedStiffness))
     }
 
+    /// `Σ_springs k (I on the diagonal blocks, −I off them)` plus the linear elements: each
+    /// spring's block `B = k [(l/r) n nᵀ + (1 − l/r) I]` has the eigenvalues `k` and
+    /// `k (1 − l/r) < k`, so `B ⪯ k I` (for `k ≥ 0`, which [`MsmModel::new`] requires) and
+    /// `K_T(q) ⪯ K̄` at every configuration (docs/math.md §5).
+    fn stiffness_bound(&self) -> Option<SparseMatrix> {
+        Some(self.tangent(&self.q0, &Coefficient::Bound))
+    }
+
     /// `L_ff ⊗ I₃` when the model has no springs (docs/math.md §8).
     fn linear_stiffness(&self) -> Option<&SparseMatrix> {
         self.linear.as_ref().filter(|_| self.is_linear())

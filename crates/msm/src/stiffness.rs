@@ -28,6 +28,10 @@ pub(crate) enum Coefficient {
     ProjectedStiffness,
     /// `1` for springs of this kind, `0` otherwise: the unit matrix `G_c`.
     Unit(SpringKind),
+    /// The spring's own `k` times the identity block, `k I ⪰ B` at any length (B's
+    /// eigenvalues are `k` along the spring and `k (1 − l/r) < k` across it): the stiffness
+    /// bound `K̄ ⪰ K_T(q)` of [`crate::MsmModel`]'s `stiffness_bound`.
+    Bound,
 }
 
 /// The block pattern of a [`Topology`] and a template matrix with that pattern.
@@ -118,6 +122,14 @@ impl Topology {
         );
         let (x, _) = x.as_chunks::<3>();
         let project = matches!(coef, Coefficient::ProjectedStiffness);
+        let bound = matches!(coef, Coefficient::Bound);
+        let block_of = |k: f64, l: f64, d: [f64; 3]| {
+            if bound {
+                [[k, 0.0, 0.0], [0.0, k, 0.0], [0.0, 0.0, k]]
+            } else {
+                stiffness_block_with(k, l, d, project)
+            }
+        };
         // Split the values into chunks of whole nodes.
         let mut chunks: Vec<(usize, &mut [f64])> = Vec::with_capacity(n.div_ceil(CHUNK_NODES));
         let mut rest = values;
@@ -141,8 +153,7 @@ impl Topology {
                     let Some(k) = coef.value(k, self.spring[e], &self.kinds) else {
                         continue;
                     };
-                    let block =
-                        stiffness_block_with(k, l, sub(xa, x[self.other[e] as usize]), project);
+                    let block = block_of(k, l, sub(xa, x[self.other[e] as usize]));
                     let off = 3 * pattern.slot[e] as usize;
                     add_block(v, stride, diag, &block, 1.0);
                     add_block(v, stride, off, &block, -1.0);
@@ -152,7 +163,7 @@ impl Topology {
                     let Some(k) = coef.value(k, self.spring_fixed[e], &self.kinds) else {
                         continue;
                     };
-                    let block = stiffness_block_with(k, l, sub(xa, self.pos_fixed[e]), project);
+                    let block = block_of(k, l, sub(xa, self.pos_fixed[e]));
                     add_block(v, stride, diag, &block, 1.0);
                 }
             }
@@ -166,7 +177,9 @@ impl Coefficient {
     #[inline]
     fn value(&self, k: f64, spring: u32, kinds: &[SpringKind]) -> Option<f64> {
         match self {
-            Coefficient::Stiffness | Coefficient::ProjectedStiffness => Some(k),
+            Coefficient::Stiffness | Coefficient::ProjectedStiffness | Coefficient::Bound => {
+                Some(k)
+            }
             Coefficient::Unit(kind) => (kinds[spring as usize] == *kind).then_some(1.0),
         }
     }

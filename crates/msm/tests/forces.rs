@@ -246,3 +246,52 @@ proptest! {
         }
     }
 }
+
+/// `K̄ = Σ k (I, −I; −I, I)` bounds the tangent at every configuration (docs/math.md §5): the
+/// smallest eigenvalue of `K̄ − K_T(q)` is not negative on stretched, compressed and
+/// scrambled lattices, and K̄ is the weighted graph Laplacian ⊗ I₃ (diagonal Σk at each node,
+/// zero row sums without fixed nodes), computed here from the spring list.
+#[test]
+fn stiffness_bound_dominates_the_tangent_everywhere() {
+    let lattice = curved_lattice(5, 4, 0.1);
+    let model = MsmModel::new(lattice.clone()).unwrap();
+    let bound = model.stiffness_bound().unwrap().to_dense();
+    let n = bound.nrows();
+    let mut degree = vec![0.0; lattice.n_nodes()];
+    for s in &lattice.springs {
+        degree[s.a] += s.k;
+        degree[s.b] += s.k;
+    }
+    for i in 0..n {
+        assert!((bound[(i, i)] - degree[i / 3]).abs() <= 1e-14 * degree[i / 3]);
+        let row: f64 = (0..n).map(|j| bound[(i, j)]).sum();
+        assert!(row.abs() <= 1e-13 * degree[i / 3], "row {i} sums to {row}");
+        for j in 0..n {
+            if i % 3 != j % 3 {
+                assert_eq!(bound[(i, j)], 0.0);
+            }
+        }
+    }
+    let x0 = lattice.flat_positions();
+    let mut rng = Lcg(11);
+    for (scale, noise) in [
+        (1.0, 0.0),
+        (2.0, 0.0),
+        (0.3, 0.0),
+        (0.05, 0.0),
+        (1.0, 0.5),
+        (0.5, 2.0),
+    ] {
+        let mut x: Vec<f64> = x0.iter().map(|v| scale * v).collect();
+        rng.perturb(&mut x, noise);
+        let kt = model.tangent_stiffness(&x).to_dense();
+        let diff = nurbspring_linalg::DenseMatrix::from_fn(n, n, |i, j| bound[(i, j)] - kt[(i, j)]);
+        let eig = nurbspring_linalg::symmetric_eigenvalues(&diff).unwrap();
+        let scale_k = degree.iter().cloned().fold(0.0, f64::max);
+        assert!(
+            eig[0] >= -1e-12 * scale_k,
+            "scale {scale}, noise {noise}: λ_min(K̄ − K_T) = {:e}",
+            eig[0]
+        );
+    }
+}

@@ -258,6 +258,19 @@ pub fn write_derivation(
     paper: Option<&PaperReport>,
     paper_table: &str,
 ) -> Result<(), Error> {
+    write_derived_files(out, scene_label, scene, d)?;
+    write_reports(out, scene_label, scene, d, paper, paper_table)
+}
+
+/// The files of [`write_derivation`] that depend on the derivation alone: `msm.json` and the
+/// lattice (or `reduction.json`), `central_node.csv` and the plots. `paper` writes them while
+/// its readings run.
+pub fn write_derived_files(
+    out: &Path,
+    scene_label: &str,
+    scene: &Scene,
+    d: &Derivation,
+) -> Result<(), Error> {
     if let Some(lattice) = &d.lattice {
         let msm = derived_msm_file(scene_label, scene, d).expect("the derivation has a lattice");
         write_json(out.join("msm.json"), &msm)?;
@@ -270,12 +283,24 @@ pub fn write_derivation(
             &reduction_file(scene_label, r, &d.node_velocities),
         )?;
     }
+    write_central_node(out, d)?;
+    write_plots(out, scene_label, d)
+}
+
+/// The reports of [`write_derivation`]: `report.json` and `report.md` (with the paper's
+/// readings and verdict table when given).
+pub fn write_reports(
+    out: &Path,
+    scene_label: &str,
+    scene: &Scene,
+    d: &Derivation,
+    paper: Option<&PaperReport>,
+    paper_table: &str,
+) -> Result<(), Error> {
     write_json(
         out.join("report.json"),
         &Report::new(scene_label, scene, d, paper),
     )?;
-    write_central_node(out, d)?;
-    write_plots(out, scene_label, d)?;
     let md = report_markdown(scene_label, d, paper_table);
     nurbspring_io::atomic::write_atomic_bytes(out.join("report.md"), md.as_bytes())?;
     Ok(())

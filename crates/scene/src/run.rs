@@ -12,7 +12,8 @@ use nurbspring_io::output::write_csv;
 use nurbspring_io::vtk::PvdSeries;
 use nurbspring_msm::MsmModel;
 use nurbspring_sim::{
-    IntegratorKind, RunOptions, RunSummary, SimError, StabilityLimit, check_time, step_count,
+    IntegratorKind, RunOptions, RunSummary, Schedule, SimError, StabilityLimit, check_time,
+    step_count,
 };
 
 use crate::export::{control_net_grid, write_geometry_frame_with, write_lattice_frame};
@@ -40,6 +41,9 @@ pub struct RunRequest {
 pub struct Simulated {
     /// The integrator.
     pub integrator: IntegratorKind,
+    /// Its steps per Δt (more than 1: an explicit scheme kept below its stability limit,
+    /// [`explicit_schedule`]).
+    pub substeps: usize,
     /// Time step.
     pub dt: f64,
     /// End time.
@@ -60,7 +64,7 @@ pub struct Simulated {
     /// The run's summary (steps taken, cancellation).
     pub summary: Option<RunSummary>,
     /// Warnings about the model (e.g. the quadrature's estimated error) or the run (an explicit
-    /// integrator replaced by an implicit one, [`explicit_fallback`]).
+    /// integrator run in substeps or replaced by an implicit one, [`explicit_schedule`]).
     pub warnings: Vec<String>,
     /// An MSM's explicit stability limit at its initial state.
     pub stability: Option<StabilityLimit>,
@@ -248,7 +252,7 @@ pub fn simulate_dnurbs(
     let (mut simulated, outcome) = finish(
         scene.path.clone(),
         "simulation.dt",
-        integrator,
+        Schedule::plain(integrator),
         dt,
         t_end,
         trajectory,
@@ -267,16 +271,19 @@ pub fn simulate_msm(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Simulated, Result<RunSummary, Error>), Error> {
     let (dt, t_end) = resolve_time(&setup.path, setup.run.dt, setup.run.t_end, request)?;
-    let mut integrator = request.integrator.unwrap_or(setup.run.integrator);
+    let requested = request.integrator.unwrap_or(setup.run.integrator);
     let stability = setup
         .model
         .stability()
         .map_err(|e| Error::model(&setup.path, None, e))?;
     let mut warnings = Vec::new();
-    if let Some(w) = explicit_fallback(integrator, dt, stability.dt_critical, request) {
+    let (schedule, limit) =
+        explicit_schedule(&setup.model, &setup.initial.q, requested, dt, request)
+            .map_err(|e| Error::model(&setup.path, None, e))?;
+    if let Some(w) = schedule_warning(requested, dt, stability.dt_critical, schedule) {
         warnings.push(w);
-        integrator = IMPLICIT_FALLBACK;
     }
+    let integrator = schedule.integrator;
     if let Some(reason) = MsmModel::integrator_problem(integrator) {
         return Err(integrator_error(
             &setup.path,
@@ -286,7 +293,7 @@ pub fn simulate_msm(
             reason,
         ));
     }
-    let mut opts = RunOptions::new(dt, t_end, integrator);
+    let mut opts = RunOptions::scheduled(dt, t_end, schedule, limit);
     opts.cancel = request.cancel.clone();
     opts.force_unstable = request.force_unstable;
     let steps = step_count(0.0, t_end, dt);
@@ -327,7 +334,7 @@ pub fn simulate_msm(
     let (mut simulated, outcome) = finish(
         setup.path.clone(),
         key,
-        integrator,
+        schedule,
         dt,
         t_end,
         trajectory,
@@ -339,32 +346,48 @@ pub fn simulate_msm(
     Ok((simulated, outcome))
 }
 
-/// The implicit integrator an MSM run falls back to when the file's explicit one is above its
-/// stability limit: Newmark's average acceleration, unconditionally stable and without
-/// numerical damping.
-pub const IMPLICIT_FALLBACK: IntegratorKind = IntegratorKind::Newmark;
+/// How an MSM run with `requested` at `dt` from the positions `q` is integrated, with the
+/// stability limit that holds for it: an explicit scheme from the file (not asked for with `--integrator`, no
+/// `--force-unstable`) runs in the fewest substeps below the lattice's uniform limit, or with
+/// [`nurbspring_sim::IMPLICIT_FALLBACK`] when that needs more than
+/// [`nurbspring_sim::MAX_SUBSTEPS`] ([`Schedule::stable`]); everything else as asked, with
+/// plain steps.
+pub fn explicit_schedule(
+    model: &MsmModel,
+    q: &[f64],
+    requested: IntegratorKind,
+    dt: f64,
+    request: &RunRequest,
+) -> Result<(Schedule, Option<StabilityLimit>), nurbspring_sim::SimError> {
+    if request.integrator.is_some() || request.force_unstable {
+        return Ok((Schedule::plain(requested), None));
+    }
+    Schedule::stable(model, q, requested, dt)
+}
 
-/// The warning of a run whose default (not requested) explicit integrator is unstable at `dt`
-/// (`dt ≥ dt_critical`, the rule of [`nurbspring_sim::simulate`]): the run then uses
-/// [`IMPLICIT_FALLBACK`]. `None` when the integrator was asked for with `--integrator`, when
-/// `--force-unstable` was given, for implicit integrators, and below the limit.
-pub fn explicit_fallback(
-    integrator: IntegratorKind,
+/// The warning of a run whose schedule differs from plain steps of the requested integrator.
+pub fn schedule_warning(
+    requested: IntegratorKind,
     dt: f64,
     dt_critical: f64,
-    request: &RunRequest,
+    schedule: Schedule,
 ) -> Option<String> {
-    if request.integrator.is_some()
-        || request.force_unstable
-        || !integrator.is_explicit()
-        || dt < dt_critical
-    {
+    if schedule.is_plain(requested) {
         return None;
     }
+    let how = if schedule.integrator == requested {
+        format!(
+            "running it in {n} substeps of dt/{n}, below the limit on every configuration of \
+             the lattice",
+            n = schedule.substeps
+        )
+    } else {
+        format!("running {} instead", schedule.integrator)
+    };
     Some(format!(
-        "{integrator} is unstable at dt = {dt} s (dt_critical = {dt_critical:.4e} s); running \
-         {IMPLICIT_FALLBACK} instead (--integrator {integrator} --force-unstable runs it anyway, \
-         --integrator chooses another)"
+        "{requested} is unstable at dt = {dt} s (dt_critical = {dt_critical:.4e} s); {how} \
+         (--integrator {requested} --force-unstable runs plain steps anyway, --integrator \
+         chooses another)"
     ))
 }
 
@@ -372,7 +395,7 @@ pub fn explicit_fallback(
 fn finish(
     path: PathBuf,
     key: &str,
-    integrator: IntegratorKind,
+    schedule: Schedule,
     dt: f64,
     t_end: f64,
     trajectory: Trajectory,
@@ -385,7 +408,8 @@ fn finish(
     let outcome = outcome(&path, key, result);
     Ok((
         Simulated {
-            integrator,
+            integrator: schedule.integrator,
+            substeps: schedule.substeps,
             dt,
             t_end,
             summary: outcome.as_ref().ok().cloned(),

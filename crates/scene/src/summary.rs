@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use nurbspring_dnurbs::{DnurbsModel, Geometry, QuadratureChoice};
-use nurbspring_sim::IntegratorKind;
+use nurbspring_sim::{IntegratorKind, Schedule};
 use serde::Serialize;
 
 use crate::build::MsmOverrides;
@@ -88,6 +88,9 @@ pub struct MsmSummary {
     pub dt_critical: f64,
     /// Whether the scene's Δt exceeds it.
     pub dt_exceeds_explicit_limit: bool,
+    /// How `simulate --model msm` runs the scene's integrator at its Δt: plain steps, substeps
+    /// below the lattice's uniform stability limit, or Newmark ([`crate::run::explicit_schedule`]).
+    pub simulate: Schedule,
 }
 
 /// `check`'s report.
@@ -155,6 +158,14 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
                 omega_max: stability.omega_max,
                 dt_critical: stability.dt_critical,
                 dt_exceeds_explicit_limit: time.dt >= stability.dt_critical,
+                simulate: Schedule::stable(
+                    &setup.model,
+                    setup.model.initial_positions(),
+                    time.msm_integrator,
+                    time.dt,
+                )
+                .map_err(|e| Error::model(&scene.path, Some("msm"), e))?
+                .0,
             })
         }
         Geometry::Curve(_) => None,
@@ -224,17 +235,21 @@ pub fn scene_warnings(scene: &Scene, model: &DnurbsModel, msm: Option<&MsmSummar
     }
     let time = scene.time_settings();
     if let Some(msm) = msm
-        && time.msm_integrator.is_explicit()
-        && time.dt >= msm.dt_critical
+        && !msm.simulate.is_plain(time.msm_integrator)
     {
+        let how = if msm.simulate.integrator == time.msm_integrator {
+            format!(
+                "runs it in {n} substeps of dt/{n} per step",
+                n = msm.simulate.substeps
+            )
+        } else {
+            format!("runs {} instead", msm.simulate.integrator)
+        };
         warnings.push(format!(
             "simulation.dt = {} is above the explicit limit of simulation.msm_integrator = {} \
-             (dt_critical = {:.4e} s): `simulate --model msm` runs {} instead; choose dt below \
+             (dt_critical = {:.4e} s): `simulate --model msm` {how}; choose dt below \
              dt_critical or an implicit integrator",
-            time.dt,
-            time.msm_integrator,
-            msm.dt_critical,
-            crate::run::IMPLICIT_FALLBACK
+            time.dt, time.msm_integrator, msm.dt_critical,
         ));
     }
     warnings

@@ -23,6 +23,9 @@ pub enum SimError {
         /// The rejected step.
         dt: f64,
     },
+    /// [`crate::RunOptions::substeps`] is zero.
+    #[error("invalid substep count 0 (at least one step of Δt/substeps per Δt)")]
+    InvalidSubsteps,
     /// The end time is not finite or lies before the initial time.
     #[error("invalid end time t_end = {t_end} (must be finite and not before the initial time)")]
     InvalidDuration {
@@ -112,6 +115,7 @@ impl SimError {
         match self {
             SimError::InvalidTimeStep { .. }
             | SimError::InvalidDuration { .. }
+            | SimError::InvalidSubsteps
             | SimError::TooManySteps { .. }
             | SimError::Unstable { .. }
             | SimError::NotSupported { .. } => ErrorKind::Input,

@@ -32,7 +32,8 @@ pub use integrators::{NewtonSettings, Stepper, make_stepper, make_stepper_with_o
 pub use model::{DynamicModel, FusedStep, LinearModel, SystemMatrix};
 pub use nurbspring_linalg::{LinalgError, SparseMatrix};
 pub use run::{
-    IntegratorKind, MAX_MAGNITUDE, MAX_STEPS, NullObserver, Observer, RunOptions, RunSummary,
-    Sample, StabilityLimit, State, check_time, representable, simulate, stability_limit,
-    step_count,
+    IMPLICIT_FALLBACK, IntegratorKind, MAX_MAGNITUDE, MAX_STEPS, MAX_SUBSTEPS, NullObserver,
+    Observer, RunOptions, RunSummary, SUBSTEP_MARGIN, Sample, Schedule, StabilityLimit, State,
+    check_time, explicit_substeps, representable, simulate, stability_limit, step_count,
+    uniform_stability_limit,
 };

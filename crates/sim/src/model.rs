@@ -122,6 +122,14 @@ pub trait DynamicModel: Sync {
     fn linear_stiffness(&self) -> Option<&SparseMatrix> {
         None
     }
+    /// A matrix `K̄` that bounds the tangent stiffness at every configuration,
+    /// `K_T(q) ⪯ K̄` (Loewner order: `xᵀK_T(q)x ≤ xᵀK̄x` for all `q` and `x`), so that
+    /// `2/√λ_max(K̄, M)` is a stability limit of the explicit schemes along any trajectory
+    /// ([`crate::uniform_stability_limit`]). The default is the constant stiffness of a linear
+    /// model ([`DynamicModel::linear_stiffness`]) and `None` otherwise (no bound known).
+    fn stiffness_bound(&self) -> Option<SparseMatrix> {
+        self.linear_stiffness().cloned()
+    }
     /// Potential of the external force for energy bookkeeping (e.g. `−qᵀ f_ext` for a constant
     /// load), so that kinetic + potential + external potential is conserved without damping.
     fn external_potential(&self, _t: f64, _q: &[f64]) -> f64 {

@@ -122,6 +122,15 @@ pub struct RunOptions {
     pub integrator: IntegratorKind,
     /// Run an explicit scheme above its stability limit anyway.
     pub force_unstable: bool,
+    /// Steps of `Δt / substeps` taken for each step of Δt (default 1); the observer still sees
+    /// the state once per Δt. An explicit scheme whose limit is below Δt runs stably this way
+    /// ([`explicit_substeps`]).
+    pub substeps: usize,
+    /// An explicit scheme's stability limit when the caller already has one that holds for
+    /// this run (from [`Schedule::stable`], [`uniform_stability_limit`] or
+    /// [`stability_limit`] at the initial state): [`simulate`] then checks against it instead
+    /// of running Lanczos again.
+    pub stability: Option<StabilityLimit>,
     /// Newton tolerance on the relative residual (default 1e-10).
     pub newton_tolerance: f64,
     /// Newton iteration limit (default 30).
@@ -134,9 +143,34 @@ pub struct RunOptions {
 
 impl RunOptions {
     /// Checks the time settings from `t0`: Δt positive and finite, t_end finite and not before
-    /// `t0`, at most [`MAX_STEPS`] steps. The one place these rules live.
+    /// `t0`, at least one substep, at most [`MAX_STEPS`] steps (substeps counted). The one
+    /// place these rules live.
     pub fn validate(&self, t0: f64) -> Result<(), SimError> {
-        check_time(self.dt, self.t_end, t0)
+        if self.substeps == 0 {
+            return Err(SimError::InvalidSubsteps);
+        }
+        check_time(self.dt, self.t_end, t0)?;
+        check_time(self.substep(), self.t_end, t0)
+    }
+
+    /// The step actually taken, `Δt / substeps`.
+    pub fn substep(&self) -> f64 {
+        self.dt / self.substeps.max(1) as f64
+    }
+
+    /// [`RunOptions::new`] with a [`Schedule`]'s integrator and substeps and the stability
+    /// limit that came with it.
+    pub fn scheduled(
+        dt: f64,
+        t_end: f64,
+        schedule: Schedule,
+        stability: Option<StabilityLimit>,
+    ) -> Self {
+        Self {
+            substeps: schedule.substeps,
+            stability,
+            ..Self::new(dt, t_end, schedule.integrator)
+        }
     }
 
     /// Defaults for everything but Δt, t_end and the integrator.
@@ -146,6 +180,8 @@ impl RunOptions {
             t_end,
             integrator,
             force_unstable: false,
+            substeps: 1,
+            stability: None,
             newton_tolerance: 1e-10,
             max_newton_iterations: 30,
             divergence_factor: 1e6,
@@ -249,6 +285,136 @@ pub fn stability_limit(model: &dyn DynamicModel, q: &[f64]) -> Result<StabilityL
     })
 }
 
+/// The stability limit that holds along any trajectory: `ω̄ = √λ_max(K̄ φ = λ M φ)` for the
+/// model's stiffness bound `K̄ ⪰ K_T(q)` ([`DynamicModel::stiffness_bound`]) and `2/ω̄`;
+/// `None` when the model has no bound. Since `K_T(q) ⪯ K̄` at every `q`, the linearization's
+/// largest frequency never exceeds `ω̄` ([`stability_limit`] gives it at one state only).
+pub fn uniform_stability_limit(
+    model: &dyn DynamicModel,
+) -> Result<Option<StabilityLimit>, SimError> {
+    let Some(k) = model.stiffness_bound() else {
+        return Ok(None);
+    };
+    let m = model.mass().to_sparse();
+    // A bound and a mass of the form S ⊗ I₃ (a lattice's per-node masses and isotropic
+    // blocks) have the eigenvalues of their factors: the pencil of the factors is a third the
+    // size.
+    let lambda = match (k.kron_identity_factor(3), m.kron_identity_factor(3)) {
+        (Some(k3), Some(m3)) => largest_generalized_eigenvalue(&k3, &m3, 1e-8)?,
+        _ => largest_generalized_eigenvalue(&k, &m, 1e-8)?,
+    }
+    .max(0.0);
+    let omega_max = lambda.sqrt();
+    Ok(Some(StabilityLimit {
+        omega_max,
+        dt_critical: if omega_max > 0.0 {
+            2.0 / omega_max
+        } else {
+            f64::INFINITY
+        },
+    }))
+}
+
+/// Fraction of the uniform stability limit a substep may reach: the margin covers damping
+/// (which lowers symplectic Euler's limit slightly below `2/ω`) and Lanczos' tolerance.
+pub const SUBSTEP_MARGIN: f64 = 0.9;
+
+/// Most substeps per step of Δt that [`explicit_substeps`] proposes; beyond it an implicit
+/// scheme is cheaper than resolving the fastest frequency.
+pub const MAX_SUBSTEPS: usize = 4096;
+
+/// How many substeps of `Δt / n` keep an explicit scheme below `dt_uniform` (the
+/// [`uniform_stability_limit`]) with the [`SUBSTEP_MARGIN`]: `n = ⌈Δt / (margin · dt_uniform)⌉`,
+/// 1 when Δt is already below; `None` when `n` would exceed [`MAX_SUBSTEPS`] or the limit is
+/// not positive.
+pub fn explicit_substeps(dt: f64, dt_uniform: f64) -> Option<usize> {
+    if dt_uniform.is_nan() || dt_uniform <= 0.0 {
+        return None;
+    }
+    let n = (dt / (SUBSTEP_MARGIN * dt_uniform)).ceil().max(1.0);
+    (n <= MAX_SUBSTEPS as f64).then_some(n as usize)
+}
+
+/// The implicit scheme a run falls back to when an explicit one cannot be run stably at Δt
+/// (no stiffness bound, or more than [`MAX_SUBSTEPS`] substeps): Newmark's average
+/// acceleration, unconditionally stable and without numerical damping.
+pub const IMPLICIT_FALLBACK: IntegratorKind = IntegratorKind::Newmark;
+
+/// How a run at Δt is integrated: the scheme and the steps of `Δt / substeps` per Δt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Schedule {
+    /// The scheme.
+    pub integrator: IntegratorKind,
+    /// Steps per Δt (1: plain steps of Δt).
+    pub substeps: usize,
+}
+
+impl Schedule {
+    /// `integrator` with plain steps of Δt.
+    pub fn plain(integrator: IntegratorKind) -> Self {
+        Self {
+            integrator,
+            substeps: 1,
+        }
+    }
+
+    /// A stable way to run `requested` on `model` at Δt from the positions `q`, with the
+    /// stability limit that holds for that run (`None` for implicit schemes). Implicit schemes
+    /// run as they are. An explicit scheme runs in the fewest substeps below the model's
+    /// [`uniform_stability_limit`] ([`explicit_substeps`]; one when Δt is already below it),
+    /// so it is stable along the whole trajectory, not only at `q`; with
+    /// [`IMPLICIT_FALLBACK`] when that takes more than [`MAX_SUBSTEPS`]. A model without a
+    /// stiffness bound runs plain steps below its limit at `q` ([`stability_limit`]) and
+    /// [`IMPLICIT_FALLBACK`] above it.
+    pub fn stable(
+        model: &dyn DynamicModel,
+        q: &[f64],
+        requested: IntegratorKind,
+        dt: f64,
+    ) -> Result<(Self, Option<StabilityLimit>), SimError> {
+        if !requested.is_explicit() {
+            return Ok((Self::plain(requested), None));
+        }
+        if let Some(uniform) = uniform_stability_limit(model)? {
+            return Ok(match explicit_substeps(dt, uniform.dt_critical) {
+                Some(substeps) => (
+                    Self {
+                        integrator: requested,
+                        substeps,
+                    },
+                    Some(uniform),
+                ),
+                None => (Self::plain(IMPLICIT_FALLBACK), None),
+            });
+        }
+        let at_q = stability_limit(model, q)?;
+        Ok(if dt < at_q.dt_critical {
+            (Self::plain(requested), Some(at_q))
+        } else {
+            (Self::plain(IMPLICIT_FALLBACK), None)
+        })
+    }
+
+    /// Whether this is `requested` with plain steps.
+    pub fn is_plain(&self, requested: IntegratorKind) -> bool {
+        *self == Self::plain(requested)
+    }
+}
+
+impl std::fmt::Display for Schedule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.substeps == 1 {
+            write!(f, "{}", self.integrator)
+        } else {
+            write!(
+                f,
+                "{} ({} substeps per step)",
+                self.integrator, self.substeps
+            )
+        }
+    }
+}
+
 /// The time rules of [`RunOptions::validate`] on plain values.
 pub fn check_time(dt: f64, t_end: f64, t0: f64) -> Result<(), SimError> {
     if !(dt.is_finite() && dt > 0.0) {
@@ -315,7 +481,9 @@ fn check_state(q: &[f64], v: &[f64], q0: &[f64], limit: f64) -> Option<String> {
 
 /// Runs `model` from `initial` to `opts.t_end` with `opts.integrator`.
 ///
-/// Explicit schemes first check `Δt < 2/ω_max` ([`stability_limit`] at the initial state) and
+/// Each step of Δt is taken as `opts.substeps` steps of `h = Δt / substeps` (one, by default).
+/// Explicit schemes first check `h < 2/ω_max` ([`RunOptions::stability`], or
+/// [`stability_limit`] at the initial state) and
 /// return [`SimError::Unstable`] unless `force_unstable`. After every step the state is checked:
 /// NaN/infinity or a runaway (`‖q − q₀‖∞ > divergence_factor · max(1, ‖q₀‖∞)`) returns
 /// [`SimError::Diverged`] naming the step and time. The observer is called at t = 0 and after
@@ -329,22 +497,31 @@ pub fn simulate(
 ) -> Result<RunSummary, SimError> {
     let dt = opts.dt;
     opts.validate(initial.t)?;
+    let h = opts.substep();
     let n = model.n_dofs();
     crate::integrators::check_state_dims(model, &initial)?;
     let (mut omega_max, mut dt_critical) = (None, None);
     if opts.integrator.is_explicit() {
-        let limit = stability_limit(model, &initial.q)?;
+        let limit = match opts.stability {
+            Some(known) => known,
+            None => stability_limit(model, &initial.q)?,
+        };
         omega_max = Some(limit.omega_max);
         dt_critical = Some(limit.dt_critical);
-        if dt >= limit.dt_critical && !opts.force_unstable {
+        if h >= limit.dt_critical && !opts.force_unstable {
             return Err(SimError::Unstable {
                 integrator: opts.integrator.name(),
-                dt,
+                dt: h,
                 dt_critical: limit.dt_critical,
             });
         }
     }
-    let mut stepper = make_stepper_with_options(opts.integrator, model, &initial, opts)?;
+    let stepper_opts = RunOptions {
+        dt: h,
+        cancel: None,
+        ..opts.clone()
+    };
+    let mut stepper = make_stepper_with_options(opts.integrator, model, &initial, &stepper_opts)?;
     let t0 = initial.t;
     let n_steps = step_count(t0, opts.t_end, dt);
     let q0 = initial.q.clone();
@@ -380,7 +557,9 @@ pub fn simulate(
             summary.cancelled = true;
             break;
         }
-        stepper.step(model, &mut state, dt)?;
+        for _ in 0..opts.substeps {
+            stepper.step(model, &mut state, h)?;
+        }
         state.t = t0 + k as f64 * dt;
         if let Some(reason) = check_state(&state.q, &state.v, &q0, runaway) {
             return Err(SimError::Diverged {

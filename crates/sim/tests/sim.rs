@@ -9,7 +9,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use nurbspring_linalg::{DenseMatrix, SparseMatrix, SpdSolver};
 use nurbspring_sim::*;
 use support::{
-    Chain, Duffing, Opaque, assert_order, initial_positions, initial_velocities, max_abs_diff, tol,
+    Chain, DoubleWell, Duffing, Opaque, assert_order, initial_positions, initial_velocities,
+    max_abs_diff, tol,
 };
 
 /// Runs `simulate` and returns the final state.
@@ -571,6 +572,116 @@ fn stability_limit_matches_the_analytic_highest_frequency() {
 }
 
 #[test]
+fn explicit_substeps_by_hand() {
+    // n = ⌈Δt / (0.9 · limit)⌉: 1 / 0.27 = 3.7 → 4.
+    assert_eq!(SUBSTEP_MARGIN, 0.9);
+    assert_eq!(explicit_substeps(1.0, 0.3), Some(4));
+    assert_eq!(explicit_substeps(0.2, 0.3), Some(1));
+    assert_eq!(explicit_substeps(0.27, 0.3), Some(1));
+    assert_eq!(explicit_substeps(0.28, 0.3), Some(2));
+    assert_eq!(explicit_substeps(1.0, f64::INFINITY), Some(1));
+    assert_eq!(
+        explicit_substeps(0.9 * MAX_SUBSTEPS as f64, 1.0),
+        Some(MAX_SUBSTEPS)
+    );
+    assert_eq!(
+        explicit_substeps(0.9 * MAX_SUBSTEPS as f64 + 0.01, 1.0),
+        None
+    );
+    for bad in [0.0, -1.0, f64::NAN] {
+        assert_eq!(explicit_substeps(1.0, bad), None, "{bad}");
+    }
+}
+
+#[test]
+fn a_linear_model_is_its_own_bound_and_schedules_substeps_above_its_limit() {
+    let c = chain();
+    let model = c.model();
+    let q0 = initial_positions(c.n);
+    // The bound of a linear model is K: the uniform limit is the analytic 2/ω_max.
+    let uniform = uniform_stability_limit(&model).unwrap().unwrap();
+    let w = c.omega(c.n);
+    assert!((uniform.omega_max - w).abs() < tol::OMEGA * w);
+    // A model without a bound (the opaque wrapper hides K) has none.
+    assert!(
+        uniform_stability_limit(&Opaque(c.model()))
+            .unwrap()
+            .is_none()
+    );
+    let dt_crit = 2.0 / w;
+    for kind in [IntegratorKind::SymplecticEuler, IntegratorKind::Rk4] {
+        // Below 0.9 of the limit: plain steps, with the limit for `simulate`.
+        let (plain, limit) = Schedule::stable(&model, &q0, kind, 0.5 * dt_crit).unwrap();
+        assert_eq!(plain, Schedule::plain(kind));
+        assert_eq!(limit, Some(uniform));
+        // Above: the same scheme in ⌈Δt / (0.9 Δt_crit)⌉ substeps.
+        let (sub, _) = Schedule::stable(&model, &q0, kind, 10.0 * dt_crit).unwrap();
+        assert_eq!(sub.integrator, kind);
+        assert_eq!(sub.substeps, (10.0_f64 / 0.9).ceil() as usize);
+        // Far above: Newmark.
+        let (far, limit) = Schedule::stable(&model, &q0, kind, 1e4 * dt_crit).unwrap();
+        assert_eq!(far, Schedule::plain(IMPLICIT_FALLBACK));
+        assert_eq!(limit, None);
+        // Without a bound: plain steps below the limit at q, Newmark above it.
+        let opaque = Opaque(c.model());
+        let (below, _) = Schedule::stable(&opaque, &q0, kind, 0.5 * dt_crit).unwrap();
+        assert_eq!(below, Schedule::plain(kind));
+        let (above, _) = Schedule::stable(&opaque, &q0, kind, 2.0 * dt_crit).unwrap();
+        assert_eq!(above, Schedule::plain(IMPLICIT_FALLBACK));
+    }
+    let (implicit, limit) =
+        Schedule::stable(&model, &q0, IntegratorKind::Newmark, 10.0 * dt_crit).unwrap();
+    assert_eq!(
+        (implicit, limit),
+        (Schedule::plain(IntegratorKind::Newmark), None)
+    );
+}
+
+#[test]
+fn substeps_are_plain_steps_of_the_substep_observed_once_per_step() {
+    let c = chain();
+    let model = c.model();
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let dt_crit = 2.0 / c.omega(c.n);
+    let n = 5;
+    let dt = 3.0 * dt_crit;
+    for kind in [
+        IntegratorKind::SymplecticEuler,
+        IntegratorKind::VelocityVerlet,
+        IntegratorKind::Rk4,
+    ] {
+        let record = |opts: &RunOptions| {
+            let mut samples: Vec<(usize, f64, Vec<f64>, Vec<f64>)> = Vec::new();
+            let mut obs = |s: &Sample<'_>| samples.push((s.step, s.t, s.q.to_vec(), s.v.to_vec()));
+            let summary =
+                simulate(&model, State::new(q0.clone(), v0.clone()), opts, &mut obs).unwrap();
+            (samples, summary)
+        };
+        let mut opts = RunOptions::new(dt, 20.0 * dt, kind);
+        opts.substeps = n;
+        let (sub, summary) = record(&opts);
+        assert_eq!(summary.steps, 20);
+        assert_eq!(sub.len(), 21);
+        let (plain, _) = record(&RunOptions::new(dt / n as f64, 20.0 * dt, kind));
+        assert_eq!(plain.len(), 20 * n + 1);
+        for (k, (step, t, q, v)) in sub.iter().enumerate() {
+            assert_eq!(*step, k);
+            assert_eq!(*t, k as f64 * dt);
+            let (_, tp, qp, vp) = &plain[k * n];
+            assert!((t - tp).abs() <= 1e-12 * dt, "{kind}: t {t} vs {tp}");
+            assert_eq!((q, v), (qp, vp), "{kind}: sample {k}");
+        }
+        // Without substeps the same Δt is refused; zero substeps are an input error.
+        let e = run_with(&model, &q0, &v0, &RunOptions::new(dt, 20.0 * dt, kind)).unwrap_err();
+        assert!(matches!(e, SimError::Unstable { .. }), "{e:?}");
+        opts.substeps = 0;
+        let e = run_with(&model, &q0, &v0, &opts).unwrap_err();
+        assert_eq!(e, SimError::InvalidSubsteps);
+        assert_eq!(e.kind(), ErrorKind::Input);
+    }
+}
+
+#[test]
 fn explicit_schemes_refuse_above_the_limit_diverge_when_forced_and_stay_bounded_below() {
     let c = chain();
     let model = c.model();
@@ -766,6 +877,66 @@ fn backward_euler_falls_back_to_lu_for_an_indefinite_newton_matrix() {
             state.q[i]
         );
         assert!((state.v[i] - (q_new - q[i]) / dt).abs() < tol::EXACT);
+    }
+}
+
+/// The buckling chain of [`DoubleWell`]: 8 light masses (m = 1e-4, so every step of Δt = 0.1
+/// is nearly quasi-static), springs k = 1 (smallest eigenvalue of K 0.12), κ = 1, ε = 1,
+/// damping 0.02, the straight chain perturbed by 1e-3 along the first mode.
+fn buckling_chain(project: bool) -> (DoubleWell, Vec<f64>) {
+    let c = Chain {
+        n: 8,
+        k: 1.0,
+        m: 1e-4,
+    };
+    let model = DoubleWell {
+        k: c.stiffness(),
+        kappa: 1.0,
+        epsilon: 1.0,
+        mass: SystemMatrix::Diagonal(vec![c.m; c.n]),
+        damping: Some(SystemMatrix::Diagonal(vec![0.02; c.n])),
+        project,
+        projections: Default::default(),
+        energies: Default::default(),
+    };
+    let q0 = (1..=c.n)
+        .map(|i| 1e-3 * (i as f64 * std::f64::consts::PI / (c.n + 1) as f64).sin())
+        .collect();
+    (model, q0)
+}
+
+#[test]
+fn implicit_schemes_settle_a_buckling_chain_into_a_well() {
+    // Near q = 0, J = M + c_v D + c_q K_T has a negative eigenvalue (m + 0.05·0.02 + 0.0025·(0.12
+    // − 1) < 0 for Newmark), so the first Newton matrices are not positive definite: Newton
+    // runs on the projected tangent with the energy line search, and the damped chain must come
+    // to rest in a well, checked without the integrator: f_int(q) = 0 there and K_T(q) is
+    // positive definite (a minimum of E, not the saddle q = 0).
+    for kind in [IntegratorKind::Newmark, IntegratorKind::BackwardEuler] {
+        let (model, q0) = buckling_chain(true);
+        let n = q0.len();
+        let end = run(&model, kind, &q0, &vec![0.0; n], 0.1, 60.0);
+        assert!(
+            model.projections.load(Ordering::Relaxed) > 0,
+            "{kind}: the projection never ran"
+        );
+        let mut f = vec![0.0; n];
+        model.internal_force(&end.q, &mut f);
+        let f_norm = f.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!(
+            f_norm < 1e-8,
+            "{kind}: |f_int| = {f_norm:e} at rest, q {:?} v {:?}",
+            end.q,
+            end.v
+        );
+        assert!(
+            SpdSolver::new(&model.tangent_stiffness(&end.q)).is_ok(),
+            "{kind}: K_T not positive definite at {:?}",
+            end.q
+        );
+        // Buckled: every mass left the straight line, to the same side as the perturbation.
+        assert!(end.q.iter().all(|&x| x > 0.1), "{kind}: {:?}", end.q);
+        assert!(model.potential_energy(&end.q) < model.potential_energy(&q0));
     }
 }
 

@@ -245,6 +245,7 @@ def _run(raw: Dict[str, Any]) -> Dict[str, Any]:
         "probes": _f64(raw["probes"], (t.size, raw["n_probes"], 3)),
         "energy": {"kinetic": kinetic, "elastic": elastic, "external": external, "total": total},
         "integrator": raw["integrator"],
+        "substeps": raw["substeps"],
         "dt": raw["dt"],
         "t_end": raw["t_end"],
         "stopped": raw["stopped"],
@@ -344,8 +345,10 @@ def simulate(
 
     Returns ``{"t": (T,) [s], "probes": (T, P, 3) [m], "energy": {"kinetic", "elastic",
     "external", "total"}: (T,) each [J] (elastic without the load; external: the load's
-    potential; total: their sum), "integrator", "dt", "t_end", "stopped", "warnings"}``; probe 0
-    is the point (node) at the centre of the parameter domain, then the scene's probes.
+    potential; total: their sum), "integrator", "substeps" (steps per ``dt``: more than 1 when
+    a scene's explicit integrator runs below its stability limit), "dt", "t_end", "stopped",
+    "warnings"}``; probe 0 is the point (node) at the centre of the parameter domain, then the
+    scene's probes.
     These are the samples of the CLI's trajectory.csv and energy.csv.
     """
     options = dict(

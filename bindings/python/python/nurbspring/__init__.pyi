@@ -122,7 +122,7 @@ def simulate(
     progress: bool = False,
 ) -> Dict[str, Any]:
     """{"t": (T,) [s], "probes": (T, P, 3) [m], "energy": {"kinetic", "elastic", "external", "total"}: (T,)
-    [J], "integrator", "dt", "t_end", "stopped", "warnings"}."""
+    [J], "integrator", "substeps", "dt", "t_end", "stopped", "warnings"}."""
 
 def derive(
     scene: Scene, derivation: Optional[str] = None, progress: bool = False

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 use nurbspring_scene::Scene;
 use nurbspring_scene::markdown::verdict_table;
-use nurbspring_scene::report::write_derivation;
+use nurbspring_scene::report::{write_derived_files, write_reports};
 
 use crate::progress::Progress;
 use crate::{CmdResult, Context, commit_out_dir, print_report, stage_out_dir};
@@ -27,22 +27,30 @@ pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
     let config = scene.derivation_config(Some(nurbspring_derive::Method::Paper))?;
     let staged = stage_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
-    let (derivation, report) = nurbspring_derive::paper::reproduce_cancellable(
-        &config,
-        Some(ctx.cancel.clone()),
-        &mut |done, total| bar.update(done, total),
-    )
-    .map_err(|e| nurbspring_scene::Error::model(&scene.path, None, e))?;
+    let model_error = |e| nurbspring_scene::Error::model(&scene.path, None, e);
+    let (main, main_setup) =
+        nurbspring_derive::derive_msm(&config, Some(ctx.cancel.clone()), &mut |done, total| {
+            bar.update(done, total)
+        })
+        .map_err(model_error)?;
     bar.finish();
+    // The main derivation's files (plots among them) are written while the readings run.
+    let label = "built-in paper scene (examples/paper.toml)";
+    let (report, written) = rayon::join(
+        || {
+            nurbspring_derive::paper::readings(
+                &config,
+                &main,
+                &main_setup,
+                Some(ctx.cancel.clone()),
+            )
+        },
+        || write_derived_files(staged.path(), label, &scene, &main),
+    );
+    written?;
+    let report = report.map_err(model_error)?;
     let table = verdict_table(&report);
-    write_derivation(
-        staged.path(),
-        "built-in paper scene (examples/paper.toml)",
-        &scene,
-        &derivation,
-        Some(&report),
-        &table,
-    )?;
+    write_reports(staged.path(), label, &scene, &main, Some(&report), &table)?;
     let out = commit_out_dir(staged)?;
     if args.json {
         return print_report(&out);

@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering;
 use clap::{Args, ValueEnum};
 use nurbspring_scene::run::{RunRequest, Simulated, simulate_dnurbs, simulate_msm, write_run};
 use nurbspring_scene::{DEFAULT_MAX_FRAMES, Error, Scene};
-use nurbspring_sim::{IntegratorKind, RunSummary};
+use nurbspring_sim::{IntegratorKind, RunSummary, Schedule};
 use serde_json::json;
 
 use crate::commands::{IntegratorChoice, MsmFlags, flag};
@@ -43,7 +43,8 @@ pub struct SimulateArgs {
     t_end: Option<f64>,
     /// Integrator (default: the scene's). D-NURBS: terzopoulos-qin, newmark, modal; MSM:
     /// symplectic-euler, verlet, rk4, backward-euler, newmark, modal (linear MSMs). A scene's
-    /// explicit MSM integrator above its stability limit is replaced by newmark, with a warning.
+    /// explicit MSM integrator above its stability limit runs in substeps below the lattice's
+    /// uniform limit (newmark when more than 4096 would be needed), with a warning.
     #[arg(long, value_enum)]
     integrator: Option<IntegratorChoice>,
     /// Run an explicit integrator above its stability limit anyway.
@@ -128,7 +129,10 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
     println!(
         "{} run ({}, {} steps, {} samples, {} ParaView frames) written to {}",
         what.label(),
-        simulated.integrator,
+        Schedule {
+            integrator: simulated.integrator,
+            substeps: simulated.substeps
+        },
         summary.steps,
         simulated.trajectory.t.len(),
         simulated.frames.len(),
@@ -163,6 +167,7 @@ pub fn run_summary(
     let mut v = json!({
         "model": model.name(),
         "integrator": simulated.integrator.name(),
+        "substeps": simulated.substeps,
         "dt": simulated.dt,
         "t_end": simulated.t_end,
         "steps": summary.steps,

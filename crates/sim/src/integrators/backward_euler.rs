@@ -60,8 +60,15 @@ impl super::Stepper for BackwardEuler {
         }
         let t_new = state.t + dt;
         // The previous step's acceleration is the Newton initial guess.
-        self.core
-            .solve(model, &self.q_hat, &state.v, t_new, &mut self.a, self.steps)?;
+        self.core.solve(
+            model,
+            &state.q,
+            &self.q_hat,
+            &state.v,
+            t_new,
+            &mut self.a,
+            self.steps,
+        )?;
         for i in 0..state.q.len() {
             state.v[i] += dt * self.a[i];
             state.q[i] = self.q_hat[i] + dt * dt * self.a[i];

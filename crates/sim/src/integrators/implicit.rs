@@ -17,8 +17,17 @@
 //! place); its factorization is sparse Cholesky ([`SpdSolver`], symbolic analysis once) while
 //! J is positive definite. When Cholesky fails (compressed springs make `K_T` indefinite), the
 //! model's positive semi-definite tangent ([`DynamicModel::projected_tangent_stiffness`])
-//! takes the place of `K_T`, so the step still lowers the step's energy; a model without one
-//! is factored by sparse LU ([`LuSolver`]).
+//! takes the place of `K_T`, so the step is a descent direction of the step's energy; a model
+//! without one is factored by sparse LU ([`LuSolver`]).
+//!
+//! **Line search.** The step's equation is the stationarity condition of the step energy
+//! `Ψ(a) = E(q̂ + c_q a)/c_q + ½aᵀ(M + c_v D)a + (D v̂ − f_ext)ᵀa` (`∇Ψ = R`, the residual;
+//! `E` is [`DynamicModel::potential_energy`]). A direction from a positive definite factor is a
+//! descent direction of Ψ. When such a step raises the residual while it is still large
+//! (Newton far from its quadratic regime, e.g. an indefinite J replaced by its projection),
+//! the step is backtracked until Ψ falls by the Armijo fraction [`ARMIJO`] of its slope, so
+//! the iteration cannot wander; a step that lowers the residual is taken whole, so the line
+//! search costs nothing where Newton already converges.
 
 use nurbspring_linalg::{LinalgError, LuSolver, ShiftedSum, SparseMatrix, SpdSolver};
 
@@ -85,6 +94,20 @@ impl NewtonSolver {
 /// converges quadratically.
 pub(crate) const CONTRACTION: f64 = 0.2;
 
+/// Armijo's sufficient-decrease fraction: a backtracked step `α p` is accepted when
+/// `Ψ(a + α p) ≤ Ψ(a) + ARMIJO · α · Rᵀp` (the customary 1e-4; Nocedal & Wright, §3.1).
+pub(crate) const ARMIJO: f64 = 1e-4;
+
+/// Most halvings of a step in the line search (the smallest step is `2⁻²⁰ ≈ 1e-6` of the full
+/// one); when none gives sufficient decrease the full step is kept, as without a line search.
+const MAX_HALVINGS: usize = 20;
+
+/// The last Newton step, kept so it can be backtracked: taken from `a − p` along `p` with
+/// slope `Rᵀp < 0` there.
+struct LastStep {
+    slope: f64,
+}
+
 /// `M + c_v D`, the constant part of the Newton matrix.
 fn constant_part(
     model: &dyn DynamicModel,
@@ -128,6 +151,8 @@ pub(crate) struct ImplicitCore {
     fint: Vec<f64>,
     residual: Vec<f64>,
     work: Vec<f64>,
+    /// The last step `p` (for the line search).
+    direction: Vec<f64>,
 }
 
 impl ImplicitCore {
@@ -169,6 +194,7 @@ impl ImplicitCore {
             fint: vec![0.0; n],
             residual: vec![0.0; n],
             work: vec![0.0; n],
+            direction: vec![0.0; n],
         })
     }
 
@@ -197,11 +223,18 @@ impl ImplicitCore {
         Ok(())
     }
 
-    /// Solves for `a` (initial guess in `a`, overwritten by the solution) at time `t_new`.
-    /// `step` is only used in error reports.
+    /// Solves for `a` (initial guess in `a`, overwritten by the solution) at time `t_new`;
+    /// `q_prev` is the position at the start of the step. `step` is only used in error reports.
+    ///
+    /// A nonlinear step starts from whichever of the guess and the acceleration that keeps
+    /// `q_prev` (`(q_prev − q̂)/c_q`) has the lower step energy Ψ: Newton with the line search
+    /// then ends no higher than `Ψ` there, so a step cannot jump to a far stationary point of
+    /// Ψ that a guess extrapolated from a fast previous step happens to lie near (a damped body
+    /// would otherwise cycle between two wells).
     pub(crate) fn solve(
         &mut self,
         model: &dyn DynamicModel,
+        q_prev: &[f64],
         q_hat: &[f64],
         v_hat: &[f64],
         t_new: f64,
@@ -221,41 +254,35 @@ impl ImplicitCore {
             self.solver.solve_in_place(a);
             return Ok(());
         }
+        self.start_low(model, q_prev, q_hat, v_hat, a);
         let mut last = f64::INFINITY;
         let mut previous = f64::INFINITY;
         // Whether the iterate was reached by a full Newton step (a factor made at the previous
         // iterate): only then does a stalled residual mean the round-off floor.
         let mut full_step = false;
+        // The step that led to this iterate, when it may be backtracked.
+        let mut last_step: Option<LastStep> = None;
         for it in 0..=self.newton.max_iterations {
-            for i in 0..a.len() {
-                self.q_trial[i] = q_hat[i] + self.cq * a[i];
-                self.v_trial[i] = v_hat[i] + self.cv * a[i];
-            }
-            model.internal_force(&self.q_trial, &mut self.fint);
-            // R = M a + D v + f_int − f_ext, with the size of each term for the relative test.
-            self.mass.mul_vec(a, &mut self.residual);
-            let mut scale = norm(&self.residual)
-                .max(norm(&self.fint))
-                .max(norm(&self.fext));
-            if let Some(d) = model.damping() {
-                d.mul_vec(&self.v_trial, &mut self.work);
-                scale = scale.max(norm(&self.work));
-                for i in 0..a.len() {
-                    self.residual[i] += self.work[i];
-                }
-            }
-            for i in 0..a.len() {
-                self.residual[i] += self.fint[i] - self.fext[i];
-            }
-            let r = norm(&self.residual);
-            if !r.is_finite() {
-                return Err(SimError::Diverged {
-                    step,
-                    time: t_new,
-                    reason: format!("non-finite Newton residual in {}", self.name),
-                });
+            let (mut r, mut scale) = self.evaluate(model, q_hat, v_hat, a);
+            if !r.is_finite() && last_step.is_none() {
+                return Err(self.non_finite(step, t_new));
             }
             last = if scale > 0.0 { r / scale } else { 0.0 };
+            // A descent step that raised a residual still far from converged is backtracked
+            // on the step energy Ψ (see the module docs).
+            if let Some(ls) = last_step.take()
+                && (!r.is_finite() || (last > previous && last > self.newton.tolerance.sqrt()))
+            {
+                if self.backtrack(model, q_hat, v_hat, a, &ls) {
+                    full_step = false;
+                }
+                // The line search used the buffers: the trial state is rebuilt at `a`.
+                (r, scale) = self.evaluate(model, q_hat, v_hat, a);
+                last = if scale > 0.0 { r / scale } else { 0.0 };
+            }
+            if !r.is_finite() {
+                return Err(self.non_finite(step, t_new));
+            }
             if r <= self.newton.tolerance * scale {
                 return Ok(());
             }
@@ -276,12 +303,30 @@ impl ImplicitCore {
             }
             previous = last;
             for i in 0..a.len() {
-                self.work[i] = -self.residual[i];
+                self.direction[i] = -self.residual[i];
             }
-            self.solver.solve_in_place(&mut self.work);
+            self.solver.solve_in_place(&mut self.direction);
             self.counts.iterations += 1;
+            // Stagnation at round-off, seen in the step: a full Newton step that moves q by
+            // less than the tolerance relative to q is at the floor of f_int's round-off (a
+            // residual whose terms cancel, as in a lattice at rest, has a meaningless relative
+            // size; the correction does not), and the error after it is of the order of its
+            // square.
+            if full_step
+                && self.cq * norm(&self.direction) <= self.newton.tolerance * norm(&self.q_trial)
+            {
+                for i in 0..a.len() {
+                    a[i] += self.direction[i];
+                }
+                return Ok(());
+            }
+            let slope = dot(&self.residual, &self.direction);
+            // Only a positive definite factor guarantees a descent direction.
+            if !self.solver.use_lu && slope < 0.0 {
+                last_step = Some(LastStep { slope });
+            }
             for i in 0..a.len() {
-                a[i] += self.work[i];
+                a[i] += self.direction[i];
             }
         }
         Err(SimError::NewtonFailed {
@@ -291,4 +336,133 @@ impl ImplicitCore {
             residual: last,
         })
     }
+
+    /// Fills the trial state, `f_int` and the residual `R = M a + D v + f_int − f_ext` at `a`;
+    /// returns `(|R|, scale)`, the scale being the largest of the terms' norms (for the relative
+    /// test).
+    fn evaluate(
+        &mut self,
+        model: &dyn DynamicModel,
+        q_hat: &[f64],
+        v_hat: &[f64],
+        a: &[f64],
+    ) -> (f64, f64) {
+        for i in 0..a.len() {
+            self.q_trial[i] = q_hat[i] + self.cq * a[i];
+            self.v_trial[i] = v_hat[i] + self.cv * a[i];
+        }
+        model.internal_force(&self.q_trial, &mut self.fint);
+        self.mass.mul_vec(a, &mut self.residual);
+        let mut scale = norm(&self.residual)
+            .max(norm(&self.fint))
+            .max(norm(&self.fext));
+        if let Some(d) = model.damping() {
+            d.mul_vec(&self.v_trial, &mut self.work);
+            scale = scale.max(norm(&self.work));
+            for i in 0..a.len() {
+                self.residual[i] += self.work[i];
+            }
+        }
+        for i in 0..a.len() {
+            self.residual[i] += self.fint[i] - self.fext[i];
+        }
+        (norm(&self.residual), scale)
+    }
+
+    /// The step energy `Ψ(a) = E(q̂ + c_q a)/c_q + ½aᵀ(M + c_v D)a + (D v̂ − f_ext)ᵀa`, whose
+    /// gradient is the residual (overwrites the `q_trial`, `work` and `fint` buffers).
+    fn step_energy(
+        &mut self,
+        model: &dyn DynamicModel,
+        q_hat: &[f64],
+        v_hat: &[f64],
+        a: &[f64],
+    ) -> f64 {
+        for i in 0..a.len() {
+            self.q_trial[i] = q_hat[i] + self.cq * a[i];
+        }
+        let mut psi = model.potential_energy(&self.q_trial) / self.cq
+            + 0.5 * model.mass().quadratic_form(a)
+            - dot(&self.fext, a);
+        if let Some(d) = model.damping() {
+            // ½ c_v aᵀDa + (D v̂)ᵀa = aᵀD(½ c_v a + v̂).
+            for i in 0..a.len() {
+                self.work[i] = 0.5 * self.cv * a[i] + v_hat[i];
+            }
+            d.mul_vec(&self.work, &mut self.fint);
+            psi += dot(a, &self.fint);
+        }
+        psi
+    }
+
+    /// Backtracks the last step: `a` holds `a₀ + p` (`p` in `direction`, slope `Rᵀp` at `a₀`);
+    /// halves the step until `Ψ(a₀ + αp) ≤ Ψ(a₀) + ARMIJO·α·Rᵀp`. Returns whether `a` was
+    /// changed; `false` (full step kept) when the full step already decreases Ψ enough or no
+    /// halving does.
+    fn backtrack(
+        &mut self,
+        model: &dyn DynamicModel,
+        q_hat: &[f64],
+        v_hat: &[f64],
+        a: &mut [f64],
+        last: &LastStep,
+    ) -> bool {
+        for i in 0..a.len() {
+            a[i] -= self.direction[i];
+        }
+        let psi0 = self.step_energy(model, q_hat, v_hat, a);
+        let mut alpha = 1.0;
+        for halving in 0..=MAX_HALVINGS {
+            for i in 0..a.len() {
+                a[i] += alpha * self.direction[i];
+            }
+            let psi = self.step_energy(model, q_hat, v_hat, a);
+            if psi <= psi0 + ARMIJO * alpha * last.slope {
+                return halving > 0;
+            }
+            for i in 0..a.len() {
+                a[i] -= alpha * self.direction[i];
+            }
+            alpha *= 0.5;
+        }
+        // No sufficient decrease (Ψ's round-off, or an inexact energy): keep the full step.
+        for i in 0..a.len() {
+            a[i] += self.direction[i];
+        }
+        false
+    }
+
+    /// Replaces the guess `a` by the acceleration that keeps `q_prev` when Ψ is lower there
+    /// (see [`ImplicitCore::solve`]); uses `direction` as scratch.
+    fn start_low(
+        &mut self,
+        model: &dyn DynamicModel,
+        q_prev: &[f64],
+        q_hat: &[f64],
+        v_hat: &[f64],
+        a: &mut [f64],
+    ) {
+        let mut stay = std::mem::take(&mut self.direction);
+        for i in 0..a.len() {
+            stay[i] = (q_prev[i] - q_hat[i]) / self.cq;
+        }
+        let psi_guess = self.step_energy(model, q_hat, v_hat, a);
+        let psi_stay = self.step_energy(model, q_hat, v_hat, &stay);
+        if psi_stay < psi_guess {
+            a.copy_from_slice(&stay);
+        }
+        self.direction = stay;
+    }
+
+    fn non_finite(&self, step: usize, time: f64) -> SimError {
+        SimError::Diverged {
+            step,
+            time,
+            reason: format!("non-finite Newton residual in {}", self.name),
+        }
+    }
+}
+
+fn dot(x: &[f64], y: &[f64]) -> f64 {
+    x.iter().zip(y).map(|(a, b)| a * b).sum()
 }

@@ -97,6 +97,7 @@ impl super::Stepper for Newmark {
         let t_new = state.t + dt;
         self.core.solve(
             model,
+            &state.q,
             &self.q_hat,
             &self.v_hat,
             t_new,

@@ -1,6 +1,8 @@
 //! Shared test support for nurbspring-sim: tolerances, test models and closed-form solutions.
 #![allow(dead_code)]
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::{DynamicModel, LinearModel, SystemMatrix};
 
@@ -210,4 +212,70 @@ impl DynamicModel for Opaque {
 
 pub fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
+}
+
+/// A buckling chain: the linear chain with a double-well grounding at every mass,
+/// `f_int(q) = K q − κ q + ε q³`, `E = ½qᵀKq + Σ (¼ε q⁴ − ½κ q²)`,
+/// `K_T = K + diag(3ε q² − κ)`. For κ above K's smallest eigenvalue the straight chain q = 0 is
+/// an unstable equilibrium (like a compressed spring lattice), and K_T is indefinite near it.
+/// With `project`, the model offers the positive semi-definite tangent
+/// `K + diag(max(3ε q² − κ, 0))`. Counts the calls of the projection and of the energy.
+pub struct DoubleWell {
+    pub k: SparseMatrix,
+    pub kappa: f64,
+    pub epsilon: f64,
+    pub mass: SystemMatrix,
+    pub damping: Option<SystemMatrix>,
+    pub project: bool,
+    pub projections: AtomicUsize,
+    pub energies: AtomicUsize,
+}
+
+impl DoubleWell {
+    fn grounding(&self, q: &[f64], clip: bool) -> SparseMatrix {
+        let d: Vec<f64> = q
+            .iter()
+            .map(|x| {
+                let s = 3.0 * self.epsilon * x * x - self.kappa;
+                if clip { s.max(0.0) } else { s }
+            })
+            .collect();
+        SparseMatrix::linear_combination(1.0, &self.k, 1.0, &SparseMatrix::from_diagonal(&d))
+            .unwrap()
+    }
+}
+
+impl DynamicModel for DoubleWell {
+    fn n_dofs(&self) -> usize {
+        self.k.nrows()
+    }
+    fn mass(&self) -> &SystemMatrix {
+        &self.mass
+    }
+    fn damping(&self) -> Option<&SystemMatrix> {
+        self.damping.as_ref()
+    }
+    fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+        self.k.mul_vec(q, out);
+        for (o, x) in out.iter_mut().zip(q) {
+            *o += self.epsilon * x * x * x - self.kappa * x;
+        }
+    }
+    fn external_force(&self, _t: f64, out: &mut [f64]) {
+        out.fill(0.0);
+    }
+    fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+        self.grounding(q, false)
+    }
+    fn projected_tangent_stiffness(&self, q: &[f64]) -> Option<SparseMatrix> {
+        self.projections.fetch_add(1, Ordering::Relaxed);
+        self.project.then(|| self.grounding(q, true))
+    }
+    fn potential_energy(&self, q: &[f64]) -> f64 {
+        self.energies.fetch_add(1, Ordering::Relaxed);
+        0.5 * self.k.quadratic_form(q)
+            + q.iter()
+                .map(|x| 0.25 * self.epsilon * x.powi(4) - 0.5 * self.kappa * x * x)
+                .sum::<f64>()
+    }
 }
