@@ -483,6 +483,19 @@ impl NurbsSurface {
     /// (`(p+1) · n_v` operations), then evaluates that curve at every `v` (`q + 1` each).
     /// Rows run in parallel.
     pub fn grid(&self, us: &[f64], vs: &[f64]) -> Result<Vec<[f64; 3]>, GeomError> {
+        // The row loops are compiled for the widest vector unit of the CPU (pulp's runtime
+        // dispatch); they are the same IEEE operations in the same order at any width, so
+        // every width gives the same bits.
+        self.grid_with(us, vs, &|row| pulp::Arch::new().dispatch(row))
+    }
+
+    /// [`NurbsSurface::grid`] with each row filled by `fill` (a vector width chosen).
+    fn grid_with(
+        &self,
+        us: &[f64],
+        vs: &[f64],
+        fill: &(dyn Fn(GridRow<'_>) + Sync),
+    ) -> Result<Vec<[f64; 3]>, GeomError> {
         for &u in us {
             self.basis_u.knots().check_parameter("u", u)?;
         }
@@ -531,47 +544,19 @@ impl NurbsSurface {
                 |(scratch, nu, curve), (row, &u)| {
                     let su = self.basis_u.find_span(u);
                     self.basis_u.values_into(su, u, nu, scratch);
-                    for c in curve.iter_mut() {
-                        *c = [0.0; 4];
-                    }
-                    for (a, &na) in nu.iter().enumerate() {
-                        let base = (su - p + a) * n_v;
-                        for (j, c) in curve.iter_mut().enumerate() {
-                            let h = hw[base + j];
-                            c[0] += na * h[0];
-                            c[1] += na * h[1];
-                            c[2] += na * h[2];
-                            c[3] += na * h[3];
-                        }
-                    }
-                    // Within a run of one span every point combines the same q + 1 curve
-                    // coefficients, so the homogeneous sums are plain array loops over the
-                    // points of a chunk (vectorized), in the order b = 0..q of a single point,
-                    // and so are the divisions: the same IEEE results as one point at a time.
-                    for &(j0, j1, s) in &runs {
-                        for start in (j0..j1).step_by(GRID_CHUNK) {
-                            let len = GRID_CHUNK.min(j1 - start);
-                            let mut h = [[0.0; GRID_CHUNK]; 4];
-                            for b in 0..=q {
-                                let c = curve[s - q + b];
-                                let nb = &nv[b * n + start..b * n + start + len];
-                                for x in 0..4 {
-                                    for (hx, &w) in h[x][..len].iter_mut().zip(nb) {
-                                        *hx += w * c[x];
-                                    }
-                                }
-                            }
-                            let mut xyz = [[0.0; GRID_CHUNK]; 3];
-                            for x in 0..3 {
-                                for t in 0..GRID_CHUNK {
-                                    xyz[x][t] = h[x][t] / h[3][t];
-                                }
-                            }
-                            for (t, point) in row[start..start + len].iter_mut().enumerate() {
-                                *point = [xyz[0][t], xyz[1][t], xyz[2][t]];
-                            }
-                        }
-                    }
+                    let (nu, curve) = (&*nu, &mut *curve);
+                    fill(GridRow {
+                        nu,
+                        su,
+                        p,
+                        q,
+                        n_v,
+                        hw: &hw,
+                        nv: &nv,
+                        runs: &runs,
+                        curve,
+                        row,
+                    });
                 },
             );
         Ok(out)
@@ -642,8 +627,102 @@ impl NurbsSurface {
     }
 }
 
-/// Points per chunk of a grid row in [`NurbsSurface::grid`].
-const GRID_CHUNK: usize = 8;
+/// One row of [`NurbsSurface::grid`]: the u bases `nu` of span `su`, the homogeneous net `hw`,
+/// the v bases `nv` by basis index, the column runs of one v span, a curve buffer and the row
+/// of points to fill.
+struct GridRow<'a> {
+    nu: &'a [f64],
+    su: usize,
+    p: usize,
+    q: usize,
+    n_v: usize,
+    hw: &'a [[f64; 4]],
+    nv: &'a [f64],
+    runs: &'a [(usize, usize, usize)],
+    curve: &'a mut [[f64; 4]],
+    row: &'a mut [[f64; 3]],
+}
+
+impl pulp::WithSimd for GridRow<'_> {
+    type Output = ();
+
+    /// Fills the row; inlined into pulp's dispatcher, so its loops are compiled for the CPU
+    /// found at run time.
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) {
+        grid_row(simd, self)
+    }
+}
+
+/// Fills one grid row with the vectors of `simd`.
+#[inline(always)]
+fn grid_row<S: pulp::Simd>(simd: S, g: GridRow<'_>) {
+    let GridRow {
+        nu,
+        su,
+        p,
+        q,
+        n_v,
+        hw,
+        nv,
+        runs,
+        curve,
+        row,
+    } = g;
+    let n = row.len();
+    for c in curve.iter_mut() {
+        *c = [0.0; 4];
+    }
+    for (a, &na) in nu.iter().enumerate() {
+        let base = (su - p + a) * n_v;
+        for (c, h) in curve.iter_mut().zip(&hw[base..base + n_v]) {
+            c[0] += na * h[0];
+            c[1] += na * h[1];
+            c[2] += na * h[2];
+            c[3] += na * h[3];
+        }
+    }
+    // Within a run of one span every point combines the same q + 1 curve coefficients: the
+    // homogeneous sums run over the points of the run in vectors of `S::F64_LANES` (the rest
+    // one by one), in the order b = 0..q of a single point, and so do the divisions: the same
+    // IEEE operations as one point at a time, so the same bits at any vector width.
+    let lanes = S::F64_LANES;
+    for &(j0, j1, s) in runs {
+        let coefficients = &curve[s - q..=s];
+        let mut j = j0;
+        while j + lanes <= j1 {
+            let zero = simd.splat_f64s(0.0);
+            let mut h = [zero; 4];
+            for (b, c) in coefficients.iter().enumerate() {
+                let w = S::as_simd_f64s(&nv[b * n + j..b * n + j + lanes]).0[0];
+                for x in 0..4 {
+                    h[x] = simd.add_f64s(h[x], simd.mul_f64s(w, simd.splat_f64s(c[x])));
+                }
+            }
+            let mut xyz = [[0.0; MAX_LANES]; 3];
+            for x in 0..3 {
+                S::as_mut_simd_f64s(&mut xyz[x][..lanes]).0[0] = simd.div_f64s(h[x], h[3]);
+            }
+            for (t, point) in row[j..j + lanes].iter_mut().enumerate() {
+                *point = [xyz[0][t], xyz[1][t], xyz[2][t]];
+            }
+            j += lanes;
+        }
+        for (j, point) in row.iter_mut().enumerate().take(j1).skip(j) {
+            let mut h = [0.0; 4];
+            for (b, c) in coefficients.iter().enumerate() {
+                let w = nv[b * n + j];
+                for x in 0..4 {
+                    h[x] += w * c[x];
+                }
+            }
+            *point = [h[0] / h[3], h[1] / h[3], h[2] / h[3]];
+        }
+    }
+}
+
+/// The most f64 lanes of a vector register (AVX-512).
+const MAX_LANES: usize = 8;
 
 /// Derivatives of `∂c/∂w_k = A_k (P_k − c)` with `A_k = N_k / W`:
 /// `∂_u = A_u (P − c) − A c_u`, `∂_uu = A_uu (P − c) − 2 A_u c_u − A c_uu`,
@@ -722,6 +801,59 @@ pub(crate) fn norm(a: [f64; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pulp::WithSimd;
+
+    #[test]
+    fn grid_rows_give_the_same_bits_at_every_vector_width() {
+        // A rational bicubic patch with interior knots (runs of several spans), on a grid
+        // whose row length is not a multiple of any width (vector and one-by-one parts).
+        let k =
+            KnotVector::try_new(vec![0., 0., 0., 0., 0.15, 0.5, 0.7, 1., 1., 1., 1.], 3).unwrap();
+        let mut pts = Vec::new();
+        let mut ws = Vec::new();
+        for i in 0..7 {
+            for j in 0..7 {
+                pts.push([
+                    i as f64 / 6.0,
+                    j as f64 / 6.0,
+                    ((3 * i + 5 * j) % 7) as f64 / 9.0,
+                ]);
+                ws.push(1.0 + ((i + 2 * j) % 3) as f64 / 4.0);
+            }
+        }
+        let s = NurbsSurface::try_new(k.clone(), k, pts, ws).unwrap();
+        let us = linspace(0.0, 1.0, 13);
+        let vs = linspace(0.0, 1.0, 37);
+        // One point at a time (1 lane) is the reference; the A2.2 point agrees to round-off
+        // (its sum runs over the tensor product in another order).
+        let expected = s
+            .grid_with(&us, &vs, &|row| row.with_simd(pulp::Scalar))
+            .unwrap();
+        let mut k = 0;
+        for &u in &us {
+            for &v in &vs {
+                let p = point_reference(&s, u, v);
+                for x in 0..3 {
+                    assert!(
+                        (expected[k][x] - p[x]).abs() <= 8.0 * f64::EPSILON,
+                        "{u} {v}"
+                    );
+                }
+                k += 1;
+            }
+        }
+        let widths: [(&str, &(dyn Fn(GridRow<'_>) + Sync)); 5] = [
+            ("dispatched", &|row| pulp::Arch::new().dispatch(row)),
+            ("1 lane", &|row| row.with_simd(pulp::Scalar)),
+            ("2 lanes", &|row| row.with_simd(pulp::Scalar128b)),
+            ("4 lanes", &|row| row.with_simd(pulp::Scalar256b)),
+            ("8 lanes", &|row| row.with_simd(pulp::Scalar512b)),
+        ];
+        for (name, fill) in widths {
+            let got = s.grid_with(&us, &vs, fill).unwrap();
+            assert_eq!(got, expected, "{name}");
+        }
+    }
 
     /// The reference path: A2.2 with heap scratch, then the same contraction.
     fn point_reference(s: &NurbsSurface, u: f64, v: f64) -> [f64; 3] {

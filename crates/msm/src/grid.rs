@@ -297,6 +297,22 @@ impl GridStep {
     /// `q += Δt v`, on the free coordinates. `workspace` must have
     /// [`GridStep::workspace_len`] entries; its contents do not matter.
     pub fn symplectic_euler(&self, dt: f64, q: &mut [f64], v: &mut [f64], workspace: &mut [f64]) {
+        // The bands' loops are compiled for the widest vector unit of the CPU (pulp's runtime
+        // dispatch): the same IEEE operations in the same order at any width.
+        self.step_with(dt, q, v, workspace, &|band| {
+            pulp::Arch::new().dispatch(band)
+        });
+    }
+
+    /// [`GridStep::symplectic_euler`] with each band run by `run` (a vector width chosen).
+    fn step_with(
+        &self,
+        dt: f64,
+        q: &mut [f64],
+        v: &mut [f64],
+        workspace: &mut [f64],
+        run: &(dyn Fn(Band<'_>) + Sync),
+    ) {
         let free = self.row_free[self.n_u];
         assert_eq!(q.len(), 3 * free, "positions of {free} free nodes expected");
         assert_eq!(
@@ -323,7 +339,7 @@ impl GridStep {
         }
         let parallel = self.n_springs >= SERIAL_SPRINGS;
         let scratch = &mut scratch[..self.bands.len() * self.band_len()];
-        self.run_bands(0, self.bands.len(), dt, q, v, scratch, halos, parallel);
+        self.run_bands(0, self.bands.len(), dt, q, v, scratch, halos, parallel, run);
     }
 
     /// Bands `b0 .. b1`, which own `q` and `v` (their free coordinates) and `scratch`.
@@ -337,9 +353,18 @@ impl GridStep {
         scratch: &mut [f64],
         halos: &[f64],
         parallel: bool,
+        run: &(dyn Fn(Band<'_>) + Sync),
     ) {
         if b1 - b0 == 1 {
-            self.band(b0, dt, q, v, scratch, halos);
+            run(Band {
+                step: self,
+                b: b0,
+                dt,
+                q,
+                v,
+                scratch,
+                halos,
+            });
             return;
         }
         let mid = (b0 + b1) / 2;
@@ -350,17 +375,18 @@ impl GridStep {
         let (s_lo, s_hi) = scratch.split_at_mut((mid - b0) * self.band_len());
         if parallel {
             rayon::join(
-                || self.run_bands(b0, mid, dt, q_lo, v_lo, s_lo, halos, parallel),
-                || self.run_bands(mid, b1, dt, q_hi, v_hi, s_hi, halos, parallel),
+                || self.run_bands(b0, mid, dt, q_lo, v_lo, s_lo, halos, parallel, run),
+                || self.run_bands(mid, b1, dt, q_hi, v_hi, s_hi, halos, parallel, run),
             );
         } else {
-            self.run_bands(b0, mid, dt, q_lo, v_lo, s_lo, halos, parallel);
-            self.run_bands(mid, b1, dt, q_hi, v_hi, s_hi, halos, parallel);
+            self.run_bands(b0, mid, dt, q_lo, v_lo, s_lo, halos, parallel, run);
+            self.run_bands(mid, b1, dt, q_hi, v_hi, s_hi, halos, parallel, run);
         }
     }
 
     /// Copies the old positions of row `p` into the SoA buffer `out` from `q`, the free
     /// coordinates starting at free node `first` (fixed nodes from their positions).
+    #[inline(always)]
     fn load_row(&self, p: usize, q: &[f64], first: usize, out: &mut [f64]) {
         let n_v = self.n_v;
         let (xs, rest) = out.split_at_mut(n_v);
@@ -388,6 +414,7 @@ impl GridStep {
     }
 
     /// Band `b`: rows `r0 .. r1` of the grid, `q` and `v` its free coordinates.
+    #[inline(always)]
     fn band(
         &self,
         b: usize,
@@ -478,7 +505,7 @@ impl GridStep {
 
     /// The forces `s d` (lower node minus upper node) of the springs of `dir` with their lower
     /// node in row `p`, into the columns `j_lo .. j_hi` of `t`.
-    #[inline]
+    #[inline(always)]
     fn spring_row(&self, p: usize, dir: &Direction, xring: &[f64], t: &mut [f64]) {
         let n_v = self.n_v;
         let row = self.row_len();
@@ -533,7 +560,7 @@ impl GridStep {
     /// The internal force of every node of row `p` (SoA into `f`): per direction, the force
     /// of its spring as lower node minus that of its spring as upper node (zero where a node
     /// has none), directions in their fixed order.
-    #[inline]
+    #[inline(always)]
     fn row_forces(&self, p: usize, tring: &[f64], f: &mut [f64]) {
         let n_v = self.n_v;
         let w = n_v + 2 * MAX_DJ;
@@ -565,7 +592,7 @@ impl GridStep {
 
     /// The update of the free nodes of row `p` from their internal forces `f` (SoA row):
     /// `v += Δt M⁻¹ (f_ext − f_int − D v)`, `q += Δt v`, written as the generic path writes it.
-    #[inline]
+    #[inline(always)]
     fn update_row(&self, p: usize, dt: f64, first: usize, q: &mut [f64], v: &mut [f64], f: &[f64]) {
         let n_v = self.n_v;
         let (fx, rest) = f.split_at(n_v);
@@ -614,6 +641,35 @@ impl GridStep {
             }
             k += 1;
         }
+    }
+}
+
+/// One band of [`GridStep::symplectic_euler`], dispatched to the CPU's vector width.
+struct Band<'a> {
+    step: &'a GridStep,
+    b: usize,
+    dt: f64,
+    q: &'a mut [f64],
+    v: &'a mut [f64],
+    scratch: &'a mut [f64],
+    halos: &'a [f64],
+}
+
+impl pulp::WithSimd for Band<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let Band {
+            step,
+            b,
+            dt,
+            q,
+            v,
+            scratch,
+            halos,
+        } = self;
+        step.band(b, dt, q, v, scratch, halos);
     }
 }
 
@@ -720,6 +776,19 @@ mod tests {
                 ..step.clone()
             };
             assert_eq!(run(&cut, &q, &v), expected, "bands {bands:?}");
+        }
+        // The band compiled without the CPU's extensions (pulp's scalar fallback) gives the
+        // same bits as the dispatched one (AVX2 where the CPU has it).
+        use pulp::WithSimd;
+        let widths: [(&str, &(dyn Fn(Band<'_>) + Sync)); 1] =
+            [("baseline", &|band| band.with_simd(pulp::Scalar))];
+        for (name, width) in widths {
+            let (mut q, mut v) = (q.clone(), v.clone());
+            let mut w = vec![f64::NAN; step.workspace_len()];
+            for _ in 0..4 {
+                step.step_with(1e-3, &mut q, &mut v, &mut w, width);
+            }
+            assert_eq!((q, v), expected, "{name}");
         }
     }
 }
