@@ -315,6 +315,9 @@ pub fn plot_series_with(
 /// PNG figures are drawn at this many times their size and averaged down (anti-aliasing).
 pub const SUPERSAMPLE: u32 = 3;
 
+/// Segments per piece of a thick line drawn on a raster (see `fill_chart`).
+const RASTER_PIECE: usize = 8;
+
 /// Averages each `k × k` block of the RGB image `big` (`w·k × h·k` pixels) into one pixel.
 fn box_downsample(big: &[u8], w: u32, h: u32, k: u32) -> Vec<u8> {
     let (w, h, k) = (w as usize, h as usize, k as usize);
@@ -494,12 +497,20 @@ where
         let has_line = matches!(s.style, SeriesStyle::Line | SeriesStyle::LinePoints);
         let has_markers = matches!(s.style, SeriesStyle::Points | SeriesStyle::LinePoints);
         if has_line {
-            let anno = chart
-                .draw_series(LineSeries::new(
-                    s.points.iter().copied(),
-                    color.stroke_width(2 * t),
-                ))
-                .map_err(|e| e.to_string())?;
+            let style = color.stroke_width(2 * t);
+            let anno = if px > 1 {
+                // At raster scale a thick line is filled as a polygon whose cost grows with its
+                // bounding box times its vertex count: short overlapping pieces of the path
+                // (one shared point between pieces) fill the same pixels far faster.
+                let n = s.points.len();
+                let pieces = (0..n.saturating_sub(1)).step_by(RASTER_PIECE).map(|i| {
+                    PathElement::new(s.points[i..n.min(i + RASTER_PIECE + 1)].to_vec(), style)
+                });
+                chart.draw_series(pieces)
+            } else {
+                chart.draw_series(LineSeries::new(s.points.iter().copied(), style))
+            }
+            .map_err(|e| e.to_string())?;
             anno.label(s.name.as_str()).legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20 * d, y)], color.stroke_width(2 * t))
             });

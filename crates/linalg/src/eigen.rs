@@ -110,6 +110,114 @@ pub fn symmetric_eigenvalues(a: &DenseMatrix) -> Result<Vec<f64>, LinalgError> {
     Ok(values)
 }
 
+/// The smallest and the largest eigenvalue of a dense symmetric matrix (its symmetric part):
+/// faer's Householder tridiagonalization, then bisection on Sturm counts of the tridiagonal
+/// matrix for the two ends of the spectrum alone (Golub & Van Loan §8.4.1), to the round-off
+/// of the tridiagonal's entries. `‖A‖₂ = max(|λ_min|, |λ_max|)` costs the reduction and two
+/// bisections instead of a whole spectrum.
+/// ```
+/// use nurbspring_linalg::{symmetric_extreme_eigenvalues, DenseMatrix};
+/// let a = DenseMatrix::from_row_major(3, 3, vec![2.0, 1.0, 0.0, 1.0, 2.0, 1.0, 0.0, 1.0, 2.0]);
+/// let (lo, hi) = symmetric_extreme_eigenvalues(&a).unwrap();
+/// let r2 = 2f64.sqrt();
+/// assert!((lo - (2.0 - r2)).abs() < 1e-14 && (hi - (2.0 + r2)).abs() < 1e-14);
+/// ```
+pub fn symmetric_extreme_eigenvalues(a: &DenseMatrix) -> Result<(f64, f64), LinalgError> {
+    check_dense_square("symmetric_extreme_eigenvalues", a)?;
+    let n = a.nrows();
+    if n == 0 {
+        return Err(mismatch(
+            "symmetric_extreme_eigenvalues",
+            "a non-empty matrix",
+            "0×0".to_string(),
+        ));
+    }
+    let (d, e) = tridiagonal_of(&symmetric_part(a));
+    Ok((
+        tridiagonal_eigenvalue(&d, &e, 0),
+        tridiagonal_eigenvalue(&d, &e, n - 1),
+    ))
+}
+
+/// The diagonal and off-diagonal of the tridiagonal matrix orthogonally similar to the
+/// symmetric `a` (faer's blocked Householder reduction, one thread).
+fn tridiagonal_of(a: &Mat<f64>) -> (Vec<f64>, Vec<f64>) {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd::tridiag;
+    let n = a.nrows();
+    if n == 1 {
+        return (vec![a[(0, 0)]], Vec::new());
+    }
+    let mut trid = a.to_owned();
+    let bs = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(n, n);
+    let mut householder = Mat::<f64>::zeros(bs, n - 1);
+    let mut buffer = MemBuffer::new(tridiag::tridiag_in_place_scratch::<f64>(
+        n,
+        Par::Seq,
+        Default::default(),
+    ));
+    tridiag::tridiag_in_place(
+        trid.as_mut(),
+        householder.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut buffer),
+        Default::default(),
+    );
+    let d = (0..n).map(|i| trid[(i, i)]).collect();
+    let e = (0..n - 1).map(|i| trid[(i + 1, i)]).collect();
+    (d, e)
+}
+
+/// The `k`-th smallest eigenvalue (from 0) of the symmetric tridiagonal matrix with diagonal
+/// `d` and off-diagonal `e`, by bisection on the Sturm count (the number of negative pivots of
+/// `T − x I = L D Lᵀ`, which is the number of eigenvalues below x), inside Gershgorin's
+/// interval, to the interval's round-off.
+fn tridiagonal_eigenvalue(d: &[f64], e: &[f64], k: usize) -> f64 {
+    let n = d.len();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..n {
+        let r = if i > 0 { e[i - 1].abs() } else { 0.0 } + if i + 1 < n { e[i].abs() } else { 0.0 };
+        lo = lo.min(d[i] - r);
+        hi = hi.max(d[i] + r);
+    }
+    let scale = lo.abs().max(hi.abs());
+    // A pivot that vanishes is replaced by a tiny one of the same sign convention (LAPACK's
+    // dstebz): the count stays correct to the round-off of the entries.
+    let tiny = f64::MIN_POSITIVE.max(f64::EPSILON * scale * f64::EPSILON);
+    let below = |x: f64| -> usize {
+        let mut count = 0;
+        let mut q = d[0] - x;
+        for i in 0..n {
+            if i > 0 {
+                q = d[i] - x - e[i - 1] * e[i - 1] / q;
+            }
+            if q.abs() < tiny {
+                q = -tiny;
+            }
+            if q < 0.0 {
+                count += 1;
+            }
+        }
+        count
+    };
+    // Widen by round-off so that the interval certainly holds the spectrum.
+    let pad = 2.0 * f64::EPSILON * scale * n as f64 + f64::MIN_POSITIVE;
+    lo -= pad;
+    hi += pad;
+    while hi - lo > 2.0 * f64::EPSILON * lo.abs().max(hi.abs()) + f64::MIN_POSITIVE {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if below(mid) > k {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 /// `K φ = λ M φ` with K symmetric and M symmetric positive definite, by Cholesky reduction:
 /// `M = L Lᵀ`, `C = L⁻¹ K L⁻ᵀ = Y Λ Yᵀ`, `φ = L⁻ᵀ Y` (Golub & Van Loan §8.7.2). Eigenvalues
 /// ascending; eigenvectors M-orthonormal (`ΦᵀMΦ = I`).

@@ -47,6 +47,7 @@ pub use dense::DenseMatrix;
 pub use eigen::{
     SymmetricEigen, generalized_eigen_sparse_lowest, generalized_symmetric_eigen,
     largest_generalized_eigenvalue, symmetric_eigen, symmetric_eigenvalues,
+    symmetric_extreme_eigenvalues,
 };
 pub use error::LinalgError;
 pub use lstsq::{affine_solution_space, least_squares, nonnegative_least_squares};

@@ -666,3 +666,57 @@ fn affine_solution_space_spans_all_solutions() {
         Err(LinalgError::Singular { .. })
     ));
 }
+
+#[test]
+fn extreme_eigenvalues_match_the_whole_spectrum() {
+    // Symmetric matrices of several sizes with spread, clustered and repeated eigenvalues; the
+    // ends of the full spectrum (faer's QR) and of the bisection agree to the backward error
+    // of the reduction, a few n ε ‖A‖.
+    let mut state: u64 = 7;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    for n in [1usize, 2, 3, 8, 40, 105] {
+        let r: Vec<f64> = (0..n * n).map(|_| next()).collect();
+        let random = DenseMatrix::from_fn(n, n, |i, j| r[i * n + j] + r[j * n + i]);
+        // Eigenvalues 1, 1, …, 1, 3 (a rank-one update of the identity: a repeated end).
+        let u = vec![1.0 / (n as f64).sqrt(); n];
+        let rank_one = DenseMatrix::from_fn(n, n, |i, j| {
+            (if i == j { 1.0 } else { 0.0 }) + 2.0 * u[i] * u[j]
+        });
+        for (name, a) in [("random", random), ("rank one", rank_one)] {
+            let all = symmetric_eigenvalues(&a).unwrap();
+            let (lo, hi) = symmetric_extreme_eigenvalues(&a).unwrap();
+            let norm = all[0].abs().max(all[n - 1].abs()).max(1.0);
+            let tol = 8.0 * n as f64 * f64::EPSILON * norm;
+            assert!(
+                (lo - all[0]).abs() <= tol,
+                "{name} n {n}: {lo} vs {}",
+                all[0]
+            );
+            assert!(
+                (hi - all[n - 1]).abs() <= tol,
+                "{name} n {n}: {hi} vs {}",
+                all[n - 1]
+            );
+        }
+    }
+    // A diagonal matrix needs no reduction: its ends exactly.
+    let d = DenseMatrix::from_fn(4, 4, |i, j| {
+        if i == j {
+            [3.0, -7.5, 0.25, 2.0][i]
+        } else {
+            0.0
+        }
+    });
+    let (lo, hi) = symmetric_extreme_eigenvalues(&d).unwrap();
+    assert!(
+        (lo + 7.5).abs() <= 4.0 * f64::EPSILON * 7.5
+            && (hi - 3.0).abs() <= 4.0 * f64::EPSILON * 7.5
+    );
+    assert!(symmetric_extreme_eigenvalues(&DenseMatrix::zeros(0, 0)).is_err());
+    assert!(symmetric_extreme_eigenvalues(&DenseMatrix::zeros(2, 3)).is_err());
+}
