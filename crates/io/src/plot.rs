@@ -313,7 +313,7 @@ pub fn plot_series_with(
 }
 
 /// PNG figures are drawn at this many times their size and averaged down (anti-aliasing).
-pub const SUPERSAMPLE: u32 = 3;
+pub const SUPERSAMPLE: u32 = 2;
 
 /// Segments per piece of a thick line drawn on a raster (see `fill_chart`).
 const RASTER_PIECE: usize = 8;
