@@ -8,7 +8,9 @@ use std::sync::atomic::AtomicBool;
 use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material};
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_msm::{Class, Constants, LatticeOptions, MsmModel, SpringLattice};
-use nurbspring_sim::{IntegratorKind, RunOptions, Schedule, StabilityLimit, State};
+use nurbspring_sim::{
+    IntegratorKind, RunOptions, Schedule, StabilityLimit, State, uniform_stability_limit,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::fit::{FitDofs, FitResult, StiffnessFit};
@@ -196,6 +198,9 @@ pub struct Setup {
     lattice: SpringLattice,
     omega: Omega,
     fits: std::sync::OnceLock<Fits>,
+    /// The uniform stability limit of the lattice with unit node masses, per set of
+    /// constants (the mass scan asks for it with one set and many masses).
+    unit_mass_limits: std::sync::Mutex<Vec<(Constants, Option<StabilityLimit>)>>,
     dnurbs_initial: State,
     nodes: NodeState,
     probe_nodes: Vec<usize>,
@@ -248,6 +253,7 @@ impl Setup {
             lattice,
             omega,
             fits: std::sync::OnceLock::new(),
+            unit_mass_limits: std::sync::Mutex::new(Vec::new()),
             dnurbs_initial,
             nodes,
             probe_nodes,
@@ -371,6 +377,9 @@ impl Setup {
     /// The stable way to run the MSM with these parameters with `requested` at Δt, and the
     /// stability limit that holds for that run ([`Schedule::stable`]: an explicit scheme in
     /// substeps below the lattice's uniform limit).
+    ///
+    /// Every node has the mass m, so `M = m M₁` and the uniform limit is that of unit masses
+    /// times `√m`: it is computed once per set of constants.
     pub fn schedule(
         &self,
         constants: &Constants,
@@ -378,13 +387,44 @@ impl Setup {
         requested: IntegratorKind,
         dt: f64,
     ) -> Result<(Schedule, Option<StabilityLimit>), DeriveError> {
-        let model = MsmModel::new(self.lattice_with(constants, m))?;
-        Ok(Schedule::stable(
-            &model,
-            model.initial_positions(),
-            requested,
-            dt,
-        )?)
+        if !requested.is_explicit() {
+            return Ok((Schedule::plain(requested), None));
+        }
+        let known = {
+            let cache = self.unit_mass_limits.lock().expect("no panic while held");
+            cache.iter().find(|(c, _)| c == constants).map(|(_, l)| *l)
+        };
+        let unit = match known {
+            Some(limit) => limit,
+            None => {
+                let model = MsmModel::new(self.lattice_with(constants, 1.0))?;
+                let limit = uniform_stability_limit(&model)?;
+                self.unit_mass_limits
+                    .lock()
+                    .expect("no panic while held")
+                    .push((constants.clone(), limit));
+                limit
+            }
+        };
+        match unit {
+            Some(unit) => {
+                let scale = m.sqrt();
+                let uniform = StabilityLimit {
+                    omega_max: unit.omega_max / scale,
+                    dt_critical: unit.dt_critical * scale,
+                };
+                Ok(Schedule::below(requested, dt, uniform))
+            }
+            None => {
+                let model = MsmModel::new(self.lattice_with(constants, m))?;
+                Ok(Schedule::stable(
+                    &model,
+                    model.initial_positions(),
+                    requested,
+                    dt,
+                )?)
+            }
+        }
     }
 
     /// Runs the D-NURBS model from the scene's initial state, recording the probes.

@@ -134,3 +134,33 @@ fn reproduction_reports_every_reading() {
         println!("{:?}", dline);
     }
 }
+
+/// The mass scan's schedule scales the unit-mass uniform limit by √m: the same schedule as
+/// the model built with that mass, for masses across the scan and beyond (plain steps, a few
+/// substeps, Newmark), and the limit within Lanczos' tolerance of the direct one.
+#[test]
+fn the_scaled_uniform_limit_schedules_like_the_model_of_each_mass() {
+    use nurbspring_msm::MsmModel;
+    use nurbspring_sim::{Schedule, uniform_stability_limit};
+    let config = paper_config();
+    let setup = nurbspring_derive::Setup::new(&config).unwrap();
+    let constants = paper_constants();
+    for m in [1e-9, 1e-4, 0.005, 0.0123, 1.0, 50.0] {
+        let (scaled, limit) = setup
+            .schedule(&constants, m, IntegratorKind::SymplecticEuler, 0.08)
+            .unwrap();
+        let model = MsmModel::new(setup.lattice_with(&constants, m)).unwrap();
+        let direct = uniform_stability_limit(&model).unwrap().unwrap();
+        let (expected, _) = Schedule::below(IntegratorKind::SymplecticEuler, 0.08, direct);
+        assert_eq!(scaled, expected, "m = {m}");
+        if let Some(limit) = limit {
+            let rel = (limit.dt_critical - direct.dt_critical).abs() / direct.dt_critical;
+            assert!(rel < 1e-7, "m = {m}: {} vs {}", limit.dt_critical, direct.dt_critical);
+        }
+    }
+    // Implicit schemes run as they are, without a limit.
+    let (implicit, limit) = setup
+        .schedule(&constants, 0.005, IntegratorKind::Newmark, 0.08)
+        .unwrap();
+    assert_eq!((implicit, limit), (Schedule::plain(IntegratorKind::Newmark), None));
+}

@@ -375,24 +375,37 @@ impl Schedule {
         if !requested.is_explicit() {
             return Ok((Self::plain(requested), None));
         }
-        if let Some(uniform) = uniform_stability_limit(model)? {
-            return Ok(match explicit_substeps(dt, uniform.dt_critical) {
-                Some(substeps) => (
-                    Self {
-                        integrator: requested,
-                        substeps,
-                    },
-                    Some(uniform),
-                ),
-                None => (Self::plain(IMPLICIT_FALLBACK), None),
-            });
+        match uniform_stability_limit(model)? {
+            Some(uniform) => Ok(Self::below(requested, dt, uniform)),
+            None => {
+                let at_q = stability_limit(model, q)?;
+                Ok(if dt < at_q.dt_critical {
+                    (Self::plain(requested), Some(at_q))
+                } else {
+                    (Self::plain(IMPLICIT_FALLBACK), None)
+                })
+            }
         }
-        let at_q = stability_limit(model, q)?;
-        Ok(if dt < at_q.dt_critical {
-            (Self::plain(requested), Some(at_q))
-        } else {
-            (Self::plain(IMPLICIT_FALLBACK), None)
-        })
+    }
+
+    /// [`Schedule::stable`] for a model whose [`uniform_stability_limit`] is known:
+    /// `requested` (explicit) in [`explicit_substeps`] of it, [`IMPLICIT_FALLBACK`] beyond
+    /// [`MAX_SUBSTEPS`].
+    pub fn below(
+        requested: IntegratorKind,
+        dt: f64,
+        uniform: StabilityLimit,
+    ) -> (Self, Option<StabilityLimit>) {
+        match explicit_substeps(dt, uniform.dt_critical) {
+            Some(substeps) => (
+                Self {
+                    integrator: requested,
+                    substeps,
+                },
+                Some(uniform),
+            ),
+            None => (Self::plain(IMPLICIT_FALLBACK), None),
+        }
     }
 
     /// Whether this is `requested` with plain steps.
