@@ -155,12 +155,20 @@ fn the_scaled_uniform_limit_schedules_like_the_model_of_each_mass() {
         assert_eq!(scaled, expected, "m = {m}");
         if let Some(limit) = limit {
             let rel = (limit.dt_critical - direct.dt_critical).abs() / direct.dt_critical;
-            assert!(rel < 1e-7, "m = {m}: {} vs {}", limit.dt_critical, direct.dt_critical);
+            assert!(
+                rel < 1e-7,
+                "m = {m}: {} vs {}",
+                limit.dt_critical,
+                direct.dt_critical
+            );
         }
     }
     // Implicit schemes run as they are, without a limit.
     let (implicit, limit) = setup
         .schedule(&constants, 0.005, IntegratorKind::Newmark, 0.08)
         .unwrap();
-    assert_eq!((implicit, limit), (Schedule::plain(IntegratorKind::Newmark), None));
+    assert_eq!(
+        (implicit, limit),
+        (Schedule::plain(IntegratorKind::Newmark), None)
+    );
 }
