@@ -18,6 +18,7 @@ pub fn mass_eigenvalues(m: &SparseMatrix) -> Result<Vec<f64>, DeriveError> {
     let factor = m.kron_identity_factor(3);
     let decomposed = factor.as_ref().unwrap_or(m);
     if decomposed.nrows() > MAX_DENSE_EIGEN {
+        // A scan needs them; with the mass fixed they are only listed (see `mass_step`).
         return Err(DeriveError::InvalidOption {
             name: "fit.mass",
             value: "\"eigenvalue-scan\"".to_string(),
@@ -30,6 +31,12 @@ pub fn mass_eigenvalues(m: &SparseMatrix) -> Result<Vec<f64>, DeriveError> {
     let dense: DenseMatrix = decomposed.to_dense();
     let eig = symmetric_eigen(&dense)?;
     Ok(distinct_non_null(&eig.values, 1e-12, 1e-9))
+}
+
+/// Whether [`mass_eigenvalues`] of `m` is within the dense solve's size.
+pub fn mass_eigenvalues_computable(m: &SparseMatrix) -> bool {
+    let rows = m.kron_identity_factor(3).map_or(m.nrows(), |s| s.nrows());
+    rows <= MAX_DENSE_EIGEN
 }
 
 /// Drops null values (`|λ| ≤ null_tol · max|λ|`) and merges values within a relative
@@ -83,6 +90,28 @@ mod tests {
                 "{g} {e} {exact}"
             );
         }
+    }
+
+    #[test]
+    fn a_net_beyond_the_dense_solve_is_refused_and_says_so() {
+        // S ⊗ I₃ with 4001 rows of S: too large; 4000 rows (12000 of M) is not.
+        let diagonal = |n: usize| SparseMatrix::from_diagonal(&vec![1.0; n]).kron_identity(3);
+        assert!(mass_eigenvalues_computable(&diagonal(4000)));
+        assert!(!mass_eigenvalues_computable(&diagonal(4001)));
+        match mass_eigenvalues(&diagonal(4001)) {
+            Err(DeriveError::InvalidOption { name, reason, .. }) => {
+                assert_eq!(name, "fit.mass");
+                assert!(reason.contains("4001 rows"), "{reason}");
+            }
+            other => panic!("{other:?}"),
+        }
+        // Without the Kronecker form the whole matrix counts.
+        let mut t: Vec<(usize, usize, f64)> = (0..4002).map(|i| (i, i, 1.0)).collect();
+        t.push((0, 1, 0.5));
+        t.push((1, 0, 0.5));
+        assert!(!mass_eigenvalues_computable(
+            &SparseMatrix::from_triplets(4002, 4002, &t).unwrap()
+        ));
     }
 
     #[test]

@@ -16,7 +16,7 @@ use crate::evaluation::{
     validation, warnings, with_totals,
 };
 use crate::fit::{FitDofs, FitResult};
-use crate::mass::mass_eigenvalues;
+use crate::mass::{mass_eigenvalues, mass_eigenvalues_computable};
 use crate::outcome::{
     Derivation, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport, ParameterSet,
     Spectrum, TrustRegionReport, Validation,
@@ -171,8 +171,16 @@ pub fn mass_step(
     cancel: Option<Arc<AtomicBool>>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<MassReport, DeriveError> {
-    let eigenvalues = mass_eigenvalues(&setup.model().matrices().mass)?;
-    let eigenvalues_free_dofs = mass_eigenvalues(setup.model().reduced_mass())?;
+    // With the mass fixed the eigenvalues are only listed: a net too large for their dense
+    // solve lists none instead of failing.
+    let listed = |m: &nurbspring_linalg::SparseMatrix| -> Result<Vec<f64>, DeriveError> {
+        match config.fit.mass {
+            MassChoice::Fixed(_) if !mass_eigenvalues_computable(m) => Ok(Vec::new()),
+            _ => mass_eigenvalues(m),
+        }
+    };
+    let eigenvalues = listed(&setup.model().matrices().mass)?;
+    let eigenvalues_free_dofs = listed(setup.model().reduced_mass())?;
     let (candidates, selected, rule) = match config.fit.mass {
         MassChoice::Fixed(m) => (Vec::new(), m, format!("fixed by the scene: m = {m}")),
         MassChoice::EigenvalueScan => {
