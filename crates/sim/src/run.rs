@@ -240,7 +240,8 @@ pub struct RunSummary {
     pub t_final: f64,
     /// True when the cancel flag stopped the run.
     pub cancelled: bool,
-    /// ω_max of the linearized model at the initial state (explicit schemes only).
+    /// The ω_max the run was checked against (explicit schemes only): the linearized
+    /// model's at the initial state, or the one given in [`RunOptions::stability`].
     pub omega_max: Option<f64>,
     /// `2/ω_max` (explicit schemes only).
     pub dt_critical: Option<f64>,
