@@ -466,3 +466,153 @@ impl ImplicitCore {
 fn dot(x: &[f64], y: &[f64]) -> f64 {
     x.iter().zip(y).map(|(a, b)| a * b).sum()
 }
+
+#[cfg(test)]
+mod tests {
+    //! The private pieces of the line search against hand computations: the step energy Ψ and
+    //! the halving of a step.
+
+    use super::*;
+    use crate::SystemMatrix;
+
+    /// `M = diag(m)`, `D = diag(d)` (optional), `f_int = K q + ε q³` with
+    /// `E = ½ qᵀKq + ¼ε Σ q⁴`, a constant load `f`.
+    struct Quartic {
+        mass: SystemMatrix,
+        damping: Option<SystemMatrix>,
+        k: SparseMatrix,
+        epsilon: f64,
+        force: Vec<f64>,
+    }
+
+    impl DynamicModel for Quartic {
+        fn n_dofs(&self) -> usize {
+            self.k.nrows()
+        }
+        fn mass(&self) -> &SystemMatrix {
+            &self.mass
+        }
+        fn damping(&self) -> Option<&SystemMatrix> {
+            self.damping.as_ref()
+        }
+        fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+            self.k.mul_vec(q, out);
+            for (o, x) in out.iter_mut().zip(q) {
+                *o += self.epsilon * x * x * x;
+            }
+        }
+        fn external_force(&self, _t: f64, out: &mut [f64]) {
+            out.copy_from_slice(&self.force);
+        }
+        fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+            let d: Vec<f64> = q.iter().map(|x| 3.0 * self.epsilon * x * x).collect();
+            SparseMatrix::linear_combination(1.0, &self.k, 1.0, &SparseMatrix::from_diagonal(&d))
+                .unwrap()
+        }
+        fn potential_energy(&self, q: &[f64]) -> f64 {
+            0.5 * self.k.quadratic_form(q)
+                + 0.25 * self.epsilon * q.iter().map(|x| x.powi(4)).sum::<f64>()
+        }
+    }
+
+    fn two_masses() -> Quartic {
+        Quartic {
+            mass: SystemMatrix::Diagonal(vec![1.0, 2.0]),
+            damping: Some(SystemMatrix::Diagonal(vec![0.3, 0.5])),
+            k: SparseMatrix::from_triplets(
+                2,
+                2,
+                &[(0, 0, 3.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 2.0)],
+            )
+            .unwrap(),
+            epsilon: 4.0,
+            force: vec![0.7, -0.4],
+        }
+    }
+
+    /// Ψ at one point by hand, and its gradient (central differences) against the residual.
+    #[test]
+    fn the_step_energy_is_the_potential_of_the_residual() {
+        let model = two_masses();
+        let (cq, cv) = (0.04, 0.2);
+        let mut core =
+            ImplicitCore::new("test", &model, cq, cv, NewtonSettings::default()).unwrap();
+        core.fext.copy_from_slice(&model.force);
+        let (q_hat, v_hat) = ([0.3, -0.2], [0.5, 0.1]);
+        let a = [1.5, -2.5];
+        // By hand: q = q̂ + c_q a = (0.36, −0.30);
+        // E(q) = ½(3·0.36² − 2·0.36·(−0.30) + 2·0.30²) + (0.36⁴ + 0.30⁴)
+        //      = ½(0.3888 + 0.216 + 0.18) + (0.01679616 + 0.0081) = 0.41729616;
+        // ½aᵀMa = ½(2.25 + 2·6.25) = 7.375; ½c_v aᵀDa = 0.1(0.3·2.25 + 0.5·6.25) = 0.38;
+        // (D v̂)ᵀa = 0.15·1.5 + 0.05·(−2.5) = 0.1; −fᵀa = −(1.05 + 1.0) = −2.05.
+        let expected = 0.41729616 / cq + 7.375 + 0.38 + 0.1 - 2.05;
+        let psi = core.step_energy(&model, &q_hat, &v_hat, &a);
+        assert!(
+            (psi - expected).abs() <= 1e-14 * expected.abs(),
+            "Ψ = {psi}, by hand {expected}"
+        );
+        // ∇Ψ = R = M a + D(v̂ + c_v a) + f_int(q̂ + c_q a) − f: Ψ is a quartic in a, so the
+        // central difference errs by h²/6·|Ψ'''| = h²·ε·c_q²·|q| ≈ 2e-11 (h = 1e-4) plus the
+        // round-off ε·|Ψ|/h ≈ 4e-11.
+        core.evaluate(&model, &q_hat, &v_hat, &a);
+        let residual = core.residual.clone();
+        let h = 1e-4;
+        for i in 0..2 {
+            let (mut ap, mut am) = (a, a);
+            ap[i] += h;
+            am[i] -= h;
+            let fd = (core.step_energy(&model, &q_hat, &v_hat, &ap)
+                - core.step_energy(&model, &q_hat, &v_hat, &am))
+                / (2.0 * h);
+            assert!(
+                (fd - residual[i]).abs() < 1e-9,
+                "{i}: {fd} vs {}",
+                residual[i]
+            );
+        }
+    }
+
+    /// One mass, `E = ¼q⁴`, m = 1, c_q = c_v = 1, q̂ = v̂ = 0: `Ψ(a) = ¼a⁴ + ½a²`,
+    /// `R(a) = a³ + a`. From a₀ = 1 (Ψ = 0.75, R = 2) along p with slope `R p`.
+    fn one_mass() -> (Quartic, ImplicitCore) {
+        let model = Quartic {
+            mass: SystemMatrix::Diagonal(vec![1.0]),
+            damping: None,
+            k: SparseMatrix::from_diagonal(&[0.0]),
+            epsilon: 1.0,
+            force: vec![0.0],
+        };
+        let core = ImplicitCore::new("test", &model, 1.0, 1.0, NewtonSettings::default()).unwrap();
+        (model, core)
+    }
+
+    /// Runs `backtrack` for the step p from a₀ = 1 (a holds a₀ + p on entry, as in `solve`).
+    fn backtrack(p: f64, slope: f64) -> (bool, f64) {
+        let (model, mut core) = one_mass();
+        core.direction = vec![p];
+        let mut a = [1.0 + p];
+        let changed = core.backtrack(&model, &[0.0], &[0.0], &mut a, &LastStep { slope });
+        (changed, a[0])
+    }
+
+    #[test]
+    fn backtracking_halves_the_step_to_the_first_that_lowers_psi_by_the_armijo_fraction() {
+        // p = −4, slope −8: α = 1 gives a = −3, Ψ = 24.75; α = ½ gives a = −1, Ψ = 0.75, equal
+        // to Ψ(a₀) and so above the bound 0.75 − 1e-4·½·8; α = ¼ gives a = 0, Ψ = 0: taken.
+        assert_eq!(backtrack(-4.0, -8.0), (true, 0.0));
+        // p = −1.5 (the step to a = −0.5, Ψ = 0.140625 < 0.75 − 1e-4·3): the full step is kept.
+        assert_eq!(backtrack(-1.5, -3.0), (false, -0.5));
+        // An uphill p = +1 declared a descent: no α ≥ 2⁻²⁰ lowers Ψ, so the full step is kept.
+        assert_eq!(backtrack(1.0, -2.0), (false, 2.0));
+        // The bound scales with α and the slope. Near a = −1, where Ψ = Ψ(a₀) = 0.75 and
+        // Ψ' = −2: `Ψ(−1 + δ) = 0.75 − 2δ + O(δ²)`.
+        // p = −2 + 2⁻¹³ (slope R p ≈ −4): α = 1 lowers Ψ by 2·2⁻¹³ ≈ 2.4e-4, less than the
+        // 4e-4 asked for, and α = ½ reaches a = 2⁻¹⁴, Ψ ≈ 0.
+        let p = -2.0 + 2f64.powi(-13);
+        assert_eq!(backtrack(p, 2.0 * p), (true, 2f64.powi(-14)));
+        // p = −4 + 2⁻¹⁰ (slope ≈ −8): α = ½ reaches a = −1 + 2⁻¹¹, lowering Ψ by
+        // 2·2⁻¹¹ ≈ 9.8e-4, more than the 4e-4 asked for at α = ½: taken.
+        let p = -4.0 + 2f64.powi(-10);
+        assert_eq!(backtrack(p, 2.0 * p), (true, -1.0 + 2f64.powi(-11)));
+    }
+}

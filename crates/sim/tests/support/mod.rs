@@ -279,3 +279,51 @@ impl DynamicModel for DoubleWell {
                 .sum::<f64>()
     }
 }
+
+/// A prestressed chain: `n` masses between fixed ends, joined by springs that each carry the
+/// tension `T = P + k s` (`s` the spring's stretch beyond its prestressed length, `s_j = q_j −
+/// q_{j−1}`, `q_{−1} = q_n = 0`). The force on mass i is computed as the difference of the two
+/// tensions, `f_int,i = T_i − T_{i+1}`, as a spring lattice computes it: mathematically
+/// `(K q)_i` with the chain's `K = k·tridiag(−1, 2, −1)` (P cancels), numerically `K q` plus
+/// a round-off of a few ulps of P that changes erratically as q moves. `E = ½ qᵀKq` (the
+/// prestress does work `P Σ s_j = 0` between fixed ends), `K_T = K`, behind the nonlinear
+/// interface.
+pub struct Prestressed {
+    pub chain: Chain,
+    pub prestress: f64,
+    pub mass: SystemMatrix,
+}
+
+impl Prestressed {
+    fn tension(&self, q: &[f64], j: usize) -> f64 {
+        let right = if j < q.len() { q[j] } else { 0.0 };
+        let left = if j > 0 { q[j - 1] } else { 0.0 };
+        self.prestress + self.chain.k * (right - left)
+    }
+}
+
+impl DynamicModel for Prestressed {
+    fn n_dofs(&self) -> usize {
+        self.chain.n
+    }
+    fn mass(&self) -> &SystemMatrix {
+        &self.mass
+    }
+    fn damping(&self) -> Option<&SystemMatrix> {
+        None
+    }
+    fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.tension(q, i) - self.tension(q, i + 1);
+        }
+    }
+    fn external_force(&self, _t: f64, out: &mut [f64]) {
+        out.fill(0.0);
+    }
+    fn tangent_stiffness(&self, _q: &[f64]) -> SparseMatrix {
+        self.chain.stiffness()
+    }
+    fn potential_energy(&self, q: &[f64]) -> f64 {
+        0.5 * self.chain.stiffness().quadratic_form(q)
+    }
+}
