@@ -1,0 +1,71 @@
+//! The names of spring kinds, linear-element kinds and constant classes are a file format
+//! (scene keys, JSON reports, `.msm.json`): each parses back to itself, the documented aliases
+//! parse to their kind, and anything else is refused.
+
+use nurbspring_msm::{Class, LinearKind, Region, SpringKind};
+
+#[test]
+fn spring_kinds_parse_their_names_and_aliases() {
+    for kind in SpringKind::ALL {
+        assert_eq!(SpringKind::parse(kind.name()), Some(kind), "{kind}");
+    }
+    let by_hand = [
+        ("structural", SpringKind::Structural),
+        ("edge", SpringKind::Structural),
+        ("shear", SpringKind::Shear),
+        ("diag", SpringKind::Shear),
+        ("diagonal", SpringKind::Shear),
+        ("bend", SpringKind::Bend),
+        ("bending", SpringKind::Bend),
+    ];
+    for (name, kind) in by_hand {
+        assert_eq!(SpringKind::parse(name), Some(kind), "{name}");
+    }
+    for name in ["", "Shear", "bend ", "twist", "spring_u"] {
+        assert_eq!(SpringKind::parse(name), None, "{name:?}");
+    }
+}
+
+#[test]
+fn linear_kinds_and_classes_parse_their_names() {
+    let names = [
+        "spring_u", "spring_v", "diagonal", "bend_u", "bend_v", "twist",
+    ];
+    assert_eq!(LinearKind::ALL.map(LinearKind::name), names);
+    for kind in LinearKind::ALL {
+        assert_eq!(LinearKind::parse(kind.name()), Some(kind));
+    }
+    assert_eq!(LinearKind::parse("bend"), None);
+    assert_eq!(Region::ALL.map(Region::name), ["interior", "boundary"]);
+
+    let linear = Class::linear(&LinearKind::ALL);
+    assert_eq!(linear.len(), 12);
+    assert_eq!(
+        linear[6],
+        Class::Linear(LinearKind::BendU, Region::Interior)
+    );
+    assert_eq!(
+        linear[7],
+        Class::Linear(LinearKind::BendU, Region::Boundary)
+    );
+    for class in Class::SPRINGS.into_iter().chain(linear) {
+        assert_eq!(Class::parse(&class.name()), Some(class), "{}", class.name());
+    }
+    assert_eq!(
+        Class::Linear(LinearKind::Twist, Region::Boundary).name(),
+        "twist@boundary"
+    );
+    assert_eq!(
+        Class::parse("edge"),
+        Some(Class::Spring(SpringKind::Structural))
+    );
+    for name in [
+        "twist",
+        "twist@edge",
+        "bend@interior",
+        "@boundary",
+        "shear@interior",
+    ] {
+        assert_eq!(Class::parse(name), None, "{name:?}");
+    }
+}
