@@ -278,3 +278,82 @@ fn chain_lattice_on_a_curve() {
         );
     }
 }
+
+/// On a flat sheet with uneven knots (nodes at u ∈ {0, 0.1, 0.4, 1}, v ∈ {0, 0.25, 1}), the
+/// out-of-plane displacement `f = u² + 3v² + 5uv` has the difference quotients of each element
+/// kind exactly: `f_uu = 2`, `f_vv = 6`, `f_uv = 5` for the three-point and four-point
+/// stencils (exact for quadratics at any spacing), and the plain difference `f_b − f_a` for
+/// springs. Each element's weight is its share of the domain by hand (dual spacings
+/// τ_u = (0.05, 0.2, 0.45, 0.3), τ_v = (0.125, 0.5, 0.375)), and its energy `½ k w |s|²`.
+#[test]
+fn stencils_on_uneven_spacing_are_exact_for_quadratics() {
+    let ku = KnotVector::try_new(vec![0., 0., 0.1, 0.4, 1., 1.], 1).unwrap();
+    let kv = KnotVector::try_new(vec![0., 0., 0.25, 1., 1.], 1).unwrap();
+    let (us, vs) = ([0.0, 0.1, 0.4, 1.0], [0.0, 0.25, 1.0]);
+    let mut pts = Vec::new();
+    for &u in &us {
+        for &v in &vs {
+            pts.push([u, v, 0.0]);
+        }
+    }
+    let plane = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 12]).unwrap();
+    let options = LatticeOptions {
+        grid: ParameterGrid::Knots,
+        constants: all_linear(false),
+        ..LatticeOptions::default()
+    };
+    let l = SpringLattice::from_surface(&plane, &options, &[]).unwrap();
+    assert_eq!(l.grid, Some((4, 3)));
+    let f = |u: f64, v: f64| u * u + 3.0 * v * v + 5.0 * u * v;
+    let params = l.params.clone().unwrap();
+    let mut disp = vec![0.0; 3 * l.n_nodes()];
+    for (a, &(u, v)) in params.iter().enumerate() {
+        disp[3 * a + 2] = f(u, v);
+    }
+    let (tau_u, tau_v) = ([0.05, 0.2, 0.45, 0.3], [0.125, 0.5, 0.375]);
+    // Node a = i·3 + j sits at (us[i], vs[j]).
+    let ij = |a: usize| (a / 3, a % 3);
+    let mut counts = [0usize; 6];
+    for e in &l.elements {
+        let n = &e.nodes;
+        let (i, j) = ij(n[0]);
+        let (expected_strain, expected_weight) = match e.kind {
+            LinearKind::SpringU | LinearKind::SpringV | LinearKind::Diagonal => {
+                let ((ua, va), (ub, vb)) = (params[n[0]], params[n[1]]);
+                let (du, dv) = (ub - ua, vb - va);
+                let w = match e.kind {
+                    LinearKind::SpringU => tau_v[j] / du,
+                    LinearKind::SpringV => tau_u[i] / dv,
+                    _ => (du * dv / (du * du + dv * dv)).abs(),
+                };
+                (f(ua, va) - f(ub, vb), w)
+            }
+            LinearKind::BendU => (2.0, tau_u[ij(n[1]).0] * tau_v[j]),
+            LinearKind::BendV => (6.0, tau_u[i] * tau_v[ij(n[1]).1]),
+            LinearKind::Twist => {
+                let (i1, j1) = ij(n[3]);
+                (5.0, (us[i1] - us[i]) * (vs[j1] - vs[j]))
+            }
+        };
+        counts[LinearKind::ALL.iter().position(|&k| k == e.kind).unwrap()] += 1;
+        let s = e.strain(&disp);
+        assert_eq!((s[0], s[1]), (0.0, 0.0));
+        let scale = expected_strain.abs().max(1.0);
+        assert!(
+            (s[2] - expected_strain).abs() <= 1e-13 * scale,
+            "{:?} at {n:?}: strain {}, by hand {expected_strain}",
+            e.kind,
+            s[2]
+        );
+        assert!(
+            (e.weight - expected_weight).abs() <= 1e-15 * expected_weight,
+            "{:?} at {n:?}: weight {}, by hand {expected_weight}",
+            e.kind,
+            e.weight
+        );
+        let energy = 0.5 * e.k * expected_weight * expected_strain * expected_strain;
+        assert!((e.energy(&disp) - energy).abs() <= 1e-12 * energy.max(1e-12));
+    }
+    // spring_u 3·3, spring_v 4·2, diagonal 2·3·2, bend_u 2·3, bend_v 4·1, twist 3·2.
+    assert_eq!(counts, [9, 8, 12, 6, 4, 6]);
+}

@@ -282,4 +282,24 @@ fn fused_step_traffic_counts_the_minimal_data() {
     assert_eq!(model.fused_step_traffic(), Some(28 * 96 + (49 + 40) * 8));
     let fused: &dyn FusedStep = model.fused_step().unwrap();
     assert!(fused.workspace_len() > 0);
+
+    // Per-node masses, damping and forces that vary are read once per free node (8 B, 8 B and
+    // 24 B); a structural direction whose springs no longer share a constant reads one per
+    // spring: the 6·4 springs along v, (j, j + 1) in a row, 8 B more each.
+    let mut lattice = sheet(6, 5, structural_shear(), FixedNodes::List(vec![0, 25]));
+    let n = lattice.n_nodes();
+    lattice
+        .set_masses((0..n).map(|a| 0.1 + 0.01 * a as f64).collect())
+        .unwrap();
+    lattice.damping = (0..n).map(|a| 0.2 + 0.01 * a as f64).collect();
+    lattice.forces = (0..n).map(|a| [0.0, 0.0, 0.1 * a as f64]).collect();
+    let along_v = lattice
+        .springs
+        .iter()
+        .position(|s| s.kind == SpringKind::Structural && s.b == s.a + 1)
+        .unwrap();
+    lattice.springs[along_v].k *= 2.0;
+    let model = MsmModel::new(lattice).unwrap();
+    let expected = 28 * 96 + (49 + 40) * 8 + 28 * (8 + 8 + 24) + 24 * 8;
+    assert_eq!(model.fused_step_traffic(), Some(expected));
 }

@@ -174,6 +174,9 @@ fn fixed_nodes_by_list_and_node_nearest() {
     assert_eq!(l.fixed_dofs(), vec![0, 1, 2, 42, 43, 44]);
     assert_eq!(l.node_nearest(0.5, 0.5), 7);
     assert_eq!(l.node_nearest(1.0, 0.0), 12);
+    // (0.125, 0) is as far from node 0 at (0, 0) as from node 3 at (0.25, 0), both distances
+    // exactly 1/64: ties go to the lower index.
+    assert_eq!(l.node_nearest(0.125, 0.0), 0);
     // Without parameters: by grid, then by position.
     let mut by_grid = l.clone();
     by_grid.params = None;
@@ -209,6 +212,33 @@ fn auto_rule_with_all_control_points_fixed_fixes_everything() {
     // Fixing the first row of control points (i = 0) fixes exactly the nodes at u = 0.
     let l = SpringLattice::from_surface(&curved_surface(), &o, &[0, 1, 2]).unwrap();
     assert_eq!(l.fixed_nodes(), vec![0, 1, 2, 3]);
+}
+
+/// On the Greville grid of the control net's size, node a is fixed when control point a is,
+/// even an interior one; a uniform grid with the same nodes (3 × 3 at 0, ½, 1 on the
+/// biquadratic patch) follows the basis-support rule, under which the middle node sees all
+/// nine control points and stays free.
+#[test]
+fn greville_nodes_follow_their_control_points_and_other_grids_the_support_rule() {
+    let fixed_points = [0, 4];
+    let greville = LatticeOptions {
+        grid: ParameterGrid::Greville,
+        ..Default::default()
+    };
+    let l = SpringLattice::from_surface(&curved_surface(), &greville, &fixed_points).unwrap();
+    assert_eq!(l.params.as_ref().unwrap()[4], (0.5, 0.5));
+    assert_eq!(l.fixed_nodes(), vec![0, 4]);
+    let uniform = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: 3,
+            nodes_v: 3,
+        },
+        ..Default::default()
+    };
+    let l = SpringLattice::from_surface(&curved_surface(), &uniform, &fixed_points).unwrap();
+    assert_eq!(l.params.as_ref().unwrap()[4], (0.5, 0.5));
+    // Node 0 sits at (0, 0), where only control point 0 has a non-zero basis value.
+    assert_eq!(l.fixed_nodes(), vec![0]);
 }
 
 fn two_nodes(spring: Spring) -> Result<SpringLattice, MsmError> {
@@ -472,6 +502,57 @@ fn json_round_trip() {
             .len(),
         12
     );
+}
+
+/// `initial_velocities`: absent means rest; a list of the right length is kept as written; a
+/// wrong length or a non-finite entry is refused, naming the node.
+#[test]
+fn file_initial_velocities() {
+    let two = r#"{"nodes": [{"position": [0,0,0], "mass": 1}, {"position": [1,0,0], "mass": 1}],
+                  "springs": [{"a": 0, "b": 1, "k": 1}]"#;
+    let file = |tail: &str| MsmFile::from_json_str(&format!("{two}{tail}}}")).unwrap();
+    assert_eq!(file("").velocities().unwrap(), vec![[0.0; 3]; 2]);
+    let given = file(r#", "initial_velocities": [[0.5, -1, 0], [0, 0, 2.25]]"#);
+    assert_eq!(
+        given.velocities().unwrap(),
+        vec![[0.5, -1.0, 0.0], [0.0, 0.0, 2.25]]
+    );
+    assert!(matches!(
+        file(r#", "initial_velocities": [[0, 0, 0]]"#).velocities(),
+        Err(MsmError::LengthMismatch {
+            expected: 2,
+            found: 1,
+            ..
+        })
+    ));
+    let mut infinite = given.clone();
+    infinite.initial_velocities.as_mut().unwrap()[1][1] = f64::INFINITY;
+    assert!(matches!(
+        infinite.velocities(),
+        Err(MsmError::NonFinite { index: 1, .. })
+    ));
+}
+
+/// An element whose class names another kind than its `kind` is refused.
+#[test]
+fn file_element_class_must_match_its_kind() {
+    let lattice = curved_lattice(3, 3, 0.0);
+    let mut file = lattice.to_file();
+    file.elements.push(nurbspring_msm::ElementRecord {
+        kind: nurbspring_msm::LinearKind::BendU,
+        class: "bend_u@interior".into(),
+        nodes: vec![0, 3, 6],
+        k: 1.0,
+        weight: 0.5,
+        coefficients: vec![1.0, -2.0, 1.0],
+    });
+    let back = SpringLattice::from_file(&file).unwrap();
+    assert_eq!(back.elements.len(), 1);
+    file.elements[0].class = "bend_v@interior".into();
+    assert!(matches!(
+        SpringLattice::from_file(&file),
+        Err(MsmError::InvalidElement { element: 0, .. })
+    ));
 }
 
 #[test]

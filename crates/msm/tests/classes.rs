@@ -1,8 +1,8 @@
-//! The names of spring kinds, linear-element kinds and constant classes are a file format
-//! (scene keys, JSON reports, `.msm.json`): each parses back to itself, the documented aliases
-//! parse to their kind, and anything else is refused.
+//! Classes and their constants. The names of spring kinds, linear-element kinds and classes
+//! are a file format (scene keys, JSON reports, `.msm.json`): each parses back to itself, the
+//! documented aliases parse to their kind, and anything else is refused.
 
-use nurbspring_msm::{Class, LinearKind, Region, SpringKind};
+use nurbspring_msm::{Class, Constants, LinearKind, Region, SpringKind};
 
 #[test]
 fn spring_kinds_parse_their_names_and_aliases() {
@@ -68,4 +68,23 @@ fn linear_kinds_and_classes_parse_their_names() {
     ] {
         assert_eq!(Class::parse(name), None, "{name:?}");
     }
+}
+
+#[test]
+fn constants_are_set_replaced_and_removed_by_class() {
+    let shear = Class::Spring(SpringKind::Shear);
+    let twist = Class::Linear(LinearKind::Twist, Region::Boundary);
+    let mut c = Constants::from_pairs([(shear, 2.5), (twist, 0.125)]);
+    assert_eq!(
+        (c.len(), c.get(shear), c.get(twist)),
+        (2, Some(2.5), Some(0.125))
+    );
+    c.set(shear, 4.0);
+    assert_eq!((c.len(), c.value(shear)), (2, 4.0));
+    c.remove(shear);
+    assert_eq!((c.len(), c.get(shear), c.contains(shear)), (1, None, false));
+    assert_eq!(c.classes(), vec![twist]);
+    c.remove(shear);
+    c.remove(twist);
+    assert!(c.is_empty());
 }
