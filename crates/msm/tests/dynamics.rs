@@ -406,3 +406,22 @@ fn damping_and_gravity_settle_a_sagging_membrane() {
         .zip(model.initial_positions().iter().skip(2).step_by(3));
     assert!(sag.map(|(z, z0)| z - z0).sum::<f64>() < 0.0);
 }
+
+/// `integrator_problem` accepts exactly the listed integrators and names them when it refuses.
+#[test]
+fn integrator_problem_lists_the_integrators_of_the_mass_spring_model() {
+    for kind in IntegratorKind::ALL {
+        let problem = MsmModel::integrator_problem(kind);
+        assert_eq!(
+            problem.is_none(),
+            MsmModel::INTEGRATORS.contains(&kind),
+            "{kind}"
+        );
+        if let Some(text) = problem {
+            for ok in MsmModel::INTEGRATORS {
+                assert!(text.contains(ok.name()), "{text}");
+            }
+        }
+    }
+    assert!(MsmModel::integrator_problem(IntegratorKind::TerzopoulosQin).is_some());
+}

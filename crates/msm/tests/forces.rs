@@ -295,3 +295,49 @@ fn stiffness_bound_dominates_the_tangent_everywhere() {
         );
     }
 }
+
+/// The per-spring methods on one spring by hand: k = 3, l = 1, nodes at (0.5, 1, −1) and
+/// (−0.5, 1, 1), so `d = x_a − x_b = (1, 0, −2)`, `r = √5`. Length r; energy
+/// `½·3·(√5 − 1)²`; force on a `k (l − r) d / r`; block `k [(l/r) n nᵀ + (1 − l/r) I]`
+/// with `n nᵀ = d dᵀ/5`, and that block is `−∂f_a/∂x_a` by central differences.
+#[test]
+fn one_spring_by_hand() {
+    let spring = nurbspring_msm::Spring {
+        a: 1,
+        b: 0,
+        kind: SpringKind::Shear,
+        k: 3.0,
+        rest_length: 1.0,
+    };
+    let x = [-0.5, 1.0, 1.0, 0.5, 1.0, -1.0];
+    let (d, r) = ([1.0, 0.0, -2.0], 5f64.sqrt());
+    assert!((spring.length(&x) - r).abs() <= 2.0 * f64::EPSILON * r);
+    let energy = 1.5 * (r - 1.0) * (r - 1.0);
+    assert!((spring.energy(&x) - energy).abs() <= 8.0 * f64::EPSILON * energy);
+    let f = spring.force_on_a(&x);
+    for i in 0..3 {
+        let by_hand = 3.0 * (1.0 - r) * d[i] / r;
+        assert!((f[i] - by_hand).abs() <= 8.0 * f64::EPSILON, "{i}: {f:?}");
+    }
+    let block = spring.stiffness_block(&x);
+    for i in 0..3 {
+        for j in 0..3 {
+            let identity = if i == j { 1.0 } else { 0.0 };
+            let by_hand = 3.0 * (d[i] * d[j] / 5.0 / r + (1.0 - 1.0 / r) * identity);
+            assert!(
+                (block[i][j] - by_hand).abs() <= 8.0 * f64::EPSILON,
+                "({i}, {j}): {} vs {by_hand}",
+                block[i][j]
+            );
+            let h = FD_STEP;
+            let (mut xp, mut xm) = (x, x);
+            xp[3 + j] += h;
+            xm[3 + j] -= h;
+            let fd = -(spring.force_on_a(&xp)[i] - spring.force_on_a(&xm)[i]) / (2.0 * h);
+            assert!(
+                (fd - block[i][j]).abs() <= FD_RELATIVE * 3.0,
+                "({i}, {j}): FD {fd}"
+            );
+        }
+    }
+}
