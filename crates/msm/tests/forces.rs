@@ -214,6 +214,20 @@ fn same_results_with_one_and_many_threads() {
     assert_eq!(one.0, many.0, "forces differ between 1 and 4 threads");
     assert_eq!(one.1.to_bits(), many.1.to_bits(), "energy differs");
     assert_eq!(one.2, many.2, "tangent differs");
+    // And the parallel sums are the sums: against the spring list, one spring at a time (no
+    // node is fixed, so q is every coordinate).
+    let lattice = curved_lattice(80, 80, 0.02);
+    let by_springs = lattice.elastic_energy(&q);
+    assert!(
+        (one.1 - by_springs).abs() <= 1e-12 * by_springs,
+        "{} vs {by_springs}",
+        one.1
+    );
+    let elastic = forces(&lattice, &q);
+    let scale = elastic.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (fi, ei) in one.0.iter().zip(&elastic) {
+        assert!((fi + ei).abs() <= 1e-12 * scale);
+    }
 }
 
 proptest! {
