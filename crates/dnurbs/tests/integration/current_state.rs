@@ -141,6 +141,42 @@ fn steady_state_with_free_weights_is_the_nonlinear_equilibrium() {
     assert_eq!(model.steady_state().unwrap(), steady.p);
 }
 
+/// Stopped at a loose tolerance (far above round-off), the reported residual is the relative
+/// equilibrium residual `|f − K(p)(p − p_rest)| / (|f| + |K(p)(p − p_rest)|)` on the free dofs
+/// of the shape it returns, recomputed here from matrices assembled at that shape.
+#[test]
+fn steady_state_reports_the_relative_residual_of_its_shape() {
+    let model = rational_model(0.0, false);
+    let steady = model
+        .steady_state_with(SteadySettings {
+            tolerance: 1e-5,
+            max_iterations: 50,
+        })
+        .unwrap();
+    let geometry = model.geometry().with_coordinates(&steady.p, true).unwrap();
+    let m = assemble(&geometry, model.material(), model.loads(), model.options()).unwrap();
+    let d: Vec<f64> = steady
+        .p
+        .iter()
+        .zip(model.p_rest())
+        .map(|(a, b)| a - b)
+        .collect();
+    let mut kd = vec![0.0; d.len()];
+    m.stiffness.mul_vec(&d, &mut kd);
+    let free = model.dof_map().free();
+    let norm = |x: &mut dyn Iterator<Item = f64>| x.map(|v| v * v).sum::<f64>().sqrt();
+    let f = norm(&mut free.iter().map(|&i| m.force[i]));
+    let e = norm(&mut free.iter().map(|&i| kd[i]));
+    let r = norm(&mut free.iter().map(|&i| m.force[i] - kd[i]));
+    let expected = r / (f + e);
+    assert!(steady.residual <= 1e-5 && expected > 1e-9, "{expected:e}");
+    assert!(
+        (steady.residual - expected).abs() <= 1e-6 * expected,
+        "reported {:e}, recomputed {expected:e}",
+        steady.residual
+    );
+}
+
 #[test]
 fn steady_state_iteration_that_cannot_converge_is_an_error() {
     let model = rational_model(0.0, false);

@@ -12,3 +12,4 @@ mod integrators;
 mod omega_weights;
 mod properties;
 mod rational;
+mod small_functions;

@@ -1,0 +1,266 @@
+//! Values of the model's small public functions and of the checks behind them, each against a
+//! hand computation or an independent recomputation: domains and measures, `Loads::is_zero`,
+//! `Matrices::n_dofs`, periods, initial states from per-point velocities and displacements,
+//! reduced coordinates under linear constraints, the consistency checks of linear
+//! constraints, and the quadrature estimate of a rational curve.
+
+use nurbspring_dnurbs::{
+    Constraints, DnurbsError, DnurbsModel, DnurbsOptions, Geometry, LinearConstraint, Loads,
+    Material, Modes, PointLoad, assemble,
+};
+use nurbspring_geom::{KnotVector, NurbsCurve, NurbsSurface};
+use nurbspring_linalg::{DenseMatrix, SparseMatrix};
+
+use crate::support::{self, tol};
+
+#[test]
+fn domain_and_parameter_measure_by_hand() {
+    let ku = KnotVector::try_new(vec![1., 1., 2., 3., 3.], 1).unwrap();
+    let kv = KnotVector::try_new(vec![2., 2., 5., 5.], 1).unwrap();
+    let pts = (0..6).map(|k| [k as f64, (k % 2) as f64, 0.0]).collect();
+    let surface = Geometry::Surface(NurbsSurface::try_new(ku, kv, pts, vec![1.0; 6]).unwrap());
+    assert_eq!(surface.domain(), ((1.0, 3.0), (2.0, 5.0)));
+    assert_eq!(surface.parameter_measure(), 6.0);
+    let k = KnotVector::try_new(vec![0.5, 0.5, 2.0, 2.0], 1).unwrap();
+    let curve = Geometry::Curve(
+        NurbsCurve::try_new(k, vec![[0.0; 3], [1.0, 0.0, 0.0]], vec![1.0; 2]).unwrap(),
+    );
+    assert_eq!(curve.domain(), ((0.5, 2.0), (0.0, 0.0)));
+    assert_eq!(curve.parameter_measure(), 1.5);
+}
+
+#[test]
+fn loads_are_zero_only_without_any_load() {
+    assert!(Loads::default().is_zero());
+    let gravity = Loads {
+        gravity: [0.0, 0.0, -1.0],
+        ..Loads::default()
+    };
+    let distributed = Loads {
+        distributed: [0.5, 0.0, 0.0],
+        ..Loads::default()
+    };
+    let point = |force| Loads {
+        point: vec![PointLoad {
+            u: 0.5,
+            v: 0.5,
+            force,
+        }],
+        ..Loads::default()
+    };
+    assert!(!gravity.is_zero() && !distributed.is_zero());
+    assert!(!point([0.0, 1.0, 0.0]).is_zero());
+    assert!(point([0.0; 3]).is_zero());
+}
+
+#[test]
+fn matrices_have_three_or_four_dofs_per_control_point() {
+    for (weights_as_dofs, per_point) in [(false, 3), (true, 4)] {
+        let options = DnurbsOptions {
+            weights_as_dofs,
+            ..DnurbsOptions::default()
+        };
+        let m = assemble(
+            &Geometry::Surface(support::paper_surface()),
+            &support::paper_material(),
+            &Loads::default(),
+            &options,
+        )
+        .unwrap();
+        assert_eq!((m.n_dofs(), m.dofs_per_point), (35 * per_point, per_point));
+        assert_eq!(m.mass.nrows(), m.n_dofs());
+    }
+}
+
+#[test]
+fn periods_are_two_pi_over_omega_and_infinite_for_rigid_modes() {
+    let pi = std::f64::consts::PI;
+    let modes = Modes {
+        omega: vec![0.0, 2.0 * pi, 4.0 * pi],
+        vectors: DenseMatrix::zeros(3, 3),
+    };
+    assert_eq!(modes.periods(), vec![f64::INFINITY, 1.0, 0.5]);
+}
+
+/// The paper's model moves control points 12, 17 and 22 (9 free dofs). A velocity per control
+/// point gives each free point its own; a shorter list leaves the points beyond it at rest;
+/// a displacement moves the free points only.
+#[test]
+fn initial_states_from_per_point_velocities_and_a_displacement() {
+    let model = support::paper_model(DnurbsOptions::default());
+    let velocities: Vec<[f64; 3]> = (0..35).map(|k| [k as f64, 0.5, -1.0]).collect();
+    let s = model.initial_state(&velocities, 0.0);
+    assert_eq!(s.v, vec![12.0, 0.5, -1.0, 17.0, 0.5, -1.0, 22.0, 0.5, -1.0]);
+    let s = model.initial_state(&velocities[..13], 0.0);
+    assert_eq!(s.v, vec![12.0, 0.5, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+
+    let d = [0.1, -0.2, 0.3];
+    let s = model.initial_state_displaced(&[[0.0; 3]], 0.0, d);
+    let p = model.full_coordinates(&s.q);
+    for k in 0..35 {
+        for x in 0..3 {
+            let moved = if [12, 17, 22].contains(&k) { d[x] } else { 0.0 };
+            assert_eq!(
+                p[3 * k + x],
+                model.p0()[3 * k + x] + moved,
+                "point {k}, {x}"
+            );
+        }
+    }
+}
+
+fn paper_with(linear: Vec<LinearConstraint>) -> Result<DnurbsModel, DnurbsError> {
+    DnurbsModel::new(
+        Geometry::Surface(support::paper_surface()),
+        support::paper_material(),
+        Loads::default(),
+        &Constraints {
+            fixed_rings: 2,
+            linear,
+            ..Constraints::default()
+        },
+        DnurbsOptions::default(),
+    )
+}
+
+/// With a constraint whose right-hand side moves the net off its initial shape the reduced
+/// coordinates have an offset (`p_f = G q + g`, g ≠ 0): `reduced_coordinates` inverts
+/// `full_coordinates` all the same.
+#[test]
+fn reduced_coordinates_invert_full_coordinates_under_linear_constraints() {
+    let z = |k: usize| 3 * k + 2;
+    let model = paper_with(vec![
+        LinearConstraint {
+            terms: vec![(z(12), 1.0), (z(22), 1.0)],
+            rhs: 4.5,
+        },
+        LinearConstraint {
+            terms: vec![(3 * 17, 2.0), (3 * 17 + 1, -1.0)],
+            rhs: 0.25,
+        },
+    ])
+    .unwrap();
+    let n = model.n_free();
+    assert_eq!(n, 7);
+    let q: Vec<f64> = (0..n).map(|i| 0.1 * i as f64 - 0.2).collect();
+    let p = model.full_coordinates(&q);
+    assert!((p[z(12)] + p[z(22)] - 4.5).abs() <= tol::SAME);
+    assert!((2.0 * p[51] - p[52] - 0.25).abs() <= tol::SAME);
+    let back = model.reduced_coordinates(&p);
+    assert!(support::max_abs_diff(&back, &q) <= tol::SAME, "{back:?}");
+}
+
+/// A constraint on fixed dofs only is checked relative to the size of its terms: with
+/// coefficients of 10⁶ on x of point 0 and y of point 1 (both on the fixed ring), a right-hand
+/// side off by 10⁻⁶ (10⁻¹² of the terms) is round-off and accepted; off by 1 it contradicts
+/// the fixed points and is refused.
+#[test]
+fn constraints_on_fixed_dofs_are_checked_relative_to_their_terms() {
+    let p0 = support::paper_model(DnurbsOptions::default()).p0().to_vec();
+    let c = 1e6;
+    let exact = c * p0[0] + c * p0[4];
+    assert!(exact.abs() > 0.5 * c);
+    let with_rhs = |rhs: f64| {
+        paper_with(vec![LinearConstraint {
+            terms: vec![(0, c), (4, c)],
+            rhs,
+        }])
+    };
+    assert!(with_rhs(exact + 1e-6).is_ok());
+    match with_rhs(exact + 1.0) {
+        Err(DnurbsError::InvalidConstraint { detail }) => {
+            assert!(detail.contains("only fixed dofs"), "{detail}")
+        }
+        other => panic!("expected InvalidConstraint, got {other:?}"),
+    }
+}
+
+#[test]
+fn inconsistent_linear_constraints_are_refused() {
+    let z12 = 3 * 12 + 2;
+    let fix = |rhs: f64| LinearConstraint {
+        terms: vec![(z12, 1.0)],
+        rhs,
+    };
+    assert!(paper_with(vec![fix(2.5), fix(2.5)]).is_ok());
+    match paper_with(vec![fix(2.5), fix(2.7)]) {
+        Err(DnurbsError::InvalidConstraint { detail }) => {
+            assert!(detail.contains("inconsistent"), "{detail}")
+        }
+        other => panic!("expected InvalidConstraint, got {other:?}"),
+    }
+}
+
+/// `max(‖M_g − M_{g+1}‖/‖M_{g+1}‖, ‖K_g − K_{g+1}‖/‖K_{g+1}‖)` for unit coefficients (μ,
+/// α11, β11 on a curve), recomputed here from the assembled matrices.
+fn estimate(curve: &Geometry, g: usize) -> (f64, f64) {
+    let at = |material: &Material, g| {
+        let options = DnurbsOptions {
+            quadrature_points: Some(g),
+            ..DnurbsOptions::default()
+        };
+        assemble(curve, material, &Loads::default(), &options).unwrap()
+    };
+    let rel = |a: &SparseMatrix, b: &SparseMatrix| {
+        SparseMatrix::linear_combination(1.0, a, -1.0, b)
+            .unwrap()
+            .frobenius_norm()
+            / b.frobenius_norm()
+    };
+    let mass = Material {
+        mu: 1.0,
+        ..Material::default()
+    };
+    let stiffness = Material {
+        alpha11: 1.0,
+        beta11: 1.0,
+        ..Material::default()
+    };
+    (
+        rel(&at(&mass, g).mass, &at(&mass, g + 1).mass),
+        rel(
+            &at(&stiffness, g).stiffness,
+            &at(&stiffness, g + 1).stiffness,
+        ),
+    )
+}
+
+/// The estimated quadrature error of a rational curve (unequal weights: no rule is exact)
+/// is the larger of the mass's and the stiffness's changes to the next rule. The largest rule
+/// is usable as given, estimated against the one below it.
+#[test]
+fn quadrature_estimate_of_a_rational_curve_counts_mass_and_stiffness() {
+    let k = KnotVector::try_new(vec![0., 0., 0., 0.5, 1., 1., 1.], 2).unwrap();
+    let pts = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.5, 0.0],
+        [2.0, -0.5, 0.2],
+        [3.0, 0.0, 0.0],
+    ];
+    let curve = Geometry::Curve(NurbsCurve::try_new(k, pts, vec![1.0, 0.3, 2.5, 1.0]).unwrap());
+    for g in 2..6 {
+        let options = DnurbsOptions {
+            quadrature_points: Some(g),
+            ..DnurbsOptions::default()
+        };
+        let choice = options.quadrature_for(&curve).unwrap();
+        let (dm, dk) = estimate(&curve, g);
+        let expected = dm.max(dk);
+        assert!(
+            (choice.estimated_error - expected).abs() <= 1e-6 * expected,
+            "g = {g}: {} vs {expected} (mass {dm:e}, stiffness {dk:e})",
+            choice.estimated_error
+        );
+        // Measured: the stiffness changes 7–70 times more than the mass at g = 2..5.
+        assert!(dk > dm);
+    }
+    let largest = nurbspring_dnurbs::MAX_QUADRATURE_POINTS;
+    let options = DnurbsOptions {
+        quadrature_points: Some(largest),
+        ..DnurbsOptions::default()
+    };
+    let choice = options.quadrature_for(&curve).unwrap();
+    let (dm, dk) = estimate(&curve, largest - 1);
+    assert_eq!(choice.points, largest);
+    assert!((choice.estimated_error - dm.max(dk)).abs() <= 1e-3 * dm.max(dk) + 1e-15);
+}
