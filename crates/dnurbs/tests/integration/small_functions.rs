@@ -264,3 +264,60 @@ fn quadrature_estimate_of_a_rational_curve_counts_mass_and_stiffness() {
     assert_eq!(choice.points, largest);
     assert!((choice.estimated_error - dm.max(dk)).abs() <= 1e-3 * dm.max(dk) + 1e-15);
 }
+
+/// A free flat patch over `[0, 2] × [0, 3]` moving rigidly with velocity `w`: by the partition
+/// of unity `ṗᵀ M ṗ = ∫∫ μ |w|² du dv` (parameter integration, unit square), so the kinetic
+/// energy is `½ μ |w|²`; at its initial shape the elastic energy is 0, and after stretching
+/// x by 1 % it is the model's own `elastic_energy` of that shape.
+#[test]
+fn energies_of_a_rigid_motion_by_hand() {
+    let model = DnurbsModel::new(
+        Geometry::Surface(support::flat_patch(2, 3, 2, 2.0, 3.0)),
+        Material {
+            mu: 2.0,
+            alpha11: 1.0,
+            alpha22: 1.0,
+            ..Material::default()
+        },
+        Loads::default(),
+        &Constraints::default(),
+        DnurbsOptions::default(),
+    )
+    .unwrap();
+    let w = [1.0, -2.0, 0.5];
+    let s = model.initial_state(&[w], 0.0);
+    let (kinetic, elastic) = model.energies(&s.q, &s.v).unwrap();
+    let expected = 0.5 * 2.0 * (1.0 + 4.0 + 0.25);
+    assert!(
+        (kinetic - expected).abs() <= tol::SAME * expected,
+        "{kinetic}"
+    );
+    assert!(elastic.abs() <= tol::SAME);
+    let mut p = model.p0().to_vec();
+    for x in p.iter_mut().step_by(3) {
+        *x *= 1.01;
+    }
+    let q = model.reduced_coordinates(&p);
+    let (_, stretched) = model.energies(&q, &s.v).unwrap();
+    assert!(stretched > 0.0);
+    let direct = model.elastic_energy(&p);
+    assert!((stretched - direct).abs() <= tol::SAME * direct);
+}
+
+/// `run_until` steps while `t < t_end − Δt/2`: with Δt = 0.5 and t_end = 1.25 it stops at
+/// t = 1 (2 steps, the remaining 0.25 is half a step), with t_end = 1.3 it takes a third.
+#[test]
+fn rational_stepper_runs_to_the_nearest_step() {
+    let model = support::paper_model(DnurbsOptions {
+        weights_as_dofs: true,
+        ..DnurbsOptions::default()
+    });
+    for (t_end, steps) in [(1.25, 2), (1.3, 3)] {
+        let s = model.initial_state(&[[0.0; 3]], 0.0);
+        let mut stepper = nurbspring_dnurbs::RationalStepper::new(&model, s, 0.5).unwrap();
+        let mut seen = 0;
+        stepper.run_until(t_end, |_| seen += 1).unwrap();
+        assert_eq!((stepper.steps(), seen), (steps, steps), "t_end = {t_end}");
+        assert_eq!(stepper.state().t, 0.5 * steps as f64);
+    }
+}
