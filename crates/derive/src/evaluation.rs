@@ -420,3 +420,158 @@ pub fn warnings(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use nurbspring_dnurbs::{Constraints, DnurbsOptions, Loads, Material};
+    use nurbspring_geom::{KnotVector, NurbsCurve, NurbsSurface};
+    use nurbspring_msm::LatticeOptions;
+    use nurbspring_sim::IntegratorKind;
+
+    use super::*;
+    use crate::setup::{Config, FitOptions, InitialConditions, TimeSettings};
+
+    fn setup(geometry: Geometry) -> Setup {
+        let alpha22 = if geometry.is_curve() { 0.0 } else { 1.0 };
+        let config = Config {
+            method: Method::Paper,
+            geometry,
+            material: Material {
+                mu: 1.0,
+                alpha11: 1.0,
+                alpha22,
+                ..Material::default()
+            },
+            loads: Loads::default(),
+            constraints: Constraints {
+                fixed_rings: 1,
+                ..Constraints::default()
+            },
+            dnurbs: DnurbsOptions::default(),
+            lattice: LatticeOptions {
+                constants: crate::paper::paper_constants(),
+                ..LatticeOptions::default()
+            },
+            initial: InitialConditions::default(),
+            time: TimeSettings {
+                dt: 0.01,
+                t_end: 0.1,
+                dnurbs_integrator: IntegratorKind::Newmark,
+                msm_integrator: IntegratorKind::SymplecticEuler,
+            },
+            fit: FitOptions::default(),
+            probes: vec![(0.5, 0.5)],
+            given: None,
+        };
+        Setup::new(&config).unwrap()
+    }
+
+    fn unit(a: [f64; 3]) -> [f64; 3] {
+        let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        a.map(|x| x / n)
+    }
+
+    /// The velocity of every control point of an impulse state, one triple per point.
+    fn point_velocities(setup: &Setup, state: &State) -> Vec<[f64; 3]> {
+        let v = setup.model().full_velocity(&state.v);
+        v.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
+    }
+
+    /// On a doubly curved bicubic patch the impulse moves the one free control point whose
+    /// Greville point is nearest (0.3, 0.35) of the domain, along the unit normal of the
+    /// surface there (checked against the cross product of central-difference tangents), at
+    /// the given speed (1 without one).
+    #[test]
+    fn the_surface_impulse_pushes_the_nearest_free_point_along_the_normal() {
+        let (ku, kv) = (
+            KnotVector::clamped_uniform(3, 3).unwrap(),
+            KnotVector::clamped_uniform(3, 2).unwrap(),
+        );
+        let (gu, gv) = (ku.greville(), kv.greville());
+        let pts = gu
+            .iter()
+            .flat_map(|&u| {
+                gv.iter()
+                    .map(move |&v| [2.0 * u + 0.2 * v, 1.5 * v, 0.3 * u * u - 0.4 * v * u])
+            })
+            .collect();
+        let s = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 30]).unwrap();
+        let setup = setup(Geometry::Surface(s.clone()));
+        // The free points are the interior 4 × 3; by hand the nearest Greville point to
+        // (0.3, 0.35) among them.
+        let mut best = (usize::MAX, f64::INFINITY, (0.0, 0.0));
+        for i in 1..5 {
+            for j in 1..4 {
+                let d = (gu[i] - 0.3).powi(2) + (gv[j] - 0.35).powi(2);
+                if d < best.1 {
+                    best = (i * 5 + j, d, (gu[i], gv[j]));
+                }
+            }
+        }
+        let (k, _, (u, v)) = best;
+        let h = 1e-5;
+        let diff = |a: [f64; 3], b: [f64; 3]| [0, 1, 2].map(|x| (a[x] - b[x]) / (2.0 * h));
+        let su = diff(s.point(u + h, v).unwrap(), s.point(u - h, v).unwrap());
+        let sv = diff(s.point(u, v + h).unwrap(), s.point(u, v - h).unwrap());
+        let normal = unit([
+            su[1] * sv[2] - su[2] * sv[1],
+            su[2] * sv[0] - su[0] * sv[2],
+            su[0] * sv[1] - su[1] * sv[0],
+        ]);
+        // Every component non-zero, so that none can be dropped unseen.
+        assert!(normal.iter().all(|c| c.abs() > 1e-3), "{normal:?}");
+        for (speed, expected_speed) in [(0.3, 0.3), (0.0, 1.0)] {
+            let state = impulse(&setup, speed).unwrap();
+            let velocities = point_velocities(&setup, &state);
+            for (a, vel) in velocities.iter().enumerate() {
+                if a == k {
+                    for x in 0..3 {
+                        assert!(
+                            (vel[x] - expected_speed * normal[x]).abs() < 1e-8,
+                            "{vel:?} vs {normal:?}"
+                        );
+                    }
+                } else {
+                    assert_eq!(*vel, [0.0; 3], "point {a}");
+                }
+            }
+        }
+    }
+
+    /// On a curve the impulse is across it: the z axis made orthogonal to the tangent (the y
+    /// axis where the tangent is nearly along z), at the free point nearest 0.3 of the domain.
+    #[test]
+    fn the_curve_impulse_pushes_across_the_tangent() {
+        let k = KnotVector::clamped_uniform(2, 4).unwrap();
+        let g = k.greville();
+        let pts: Vec<[f64; 3]> = g.iter().map(|&u| [3.0 * u, u * u, 0.8 * u]).collect();
+        let n = pts.len();
+        let c = NurbsCurve::try_new(k, pts, vec![1.0; n]).unwrap();
+        let setup = setup(Geometry::Curve(c.clone()));
+        let (point, &u) = g[1..n - 1]
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1 - 0.3).abs().total_cmp(&(b.1 - 0.3).abs()))
+            .map(|(i, u)| (i + 1, u))
+            .unwrap();
+        let h = 1e-5;
+        let (a, b) = (c.point(u + h).unwrap(), c.point(u - h).unwrap());
+        let t = unit([0, 1, 2].map(|x| a[x] - b[x]));
+        let expected = unit([-t[2] * t[0], -t[2] * t[1], 1.0 - t[2] * t[2]]);
+        let velocities = point_velocities(&setup, &impulse(&setup, 2.0).unwrap());
+        for x in 0..3 {
+            assert!((velocities[point][x] - 2.0 * expected[x]).abs() < 1e-8);
+        }
+        assert_eq!(velocities.iter().filter(|v| **v != [0.0; 3]).count(), 1);
+    }
+
+    #[test]
+    fn horizon_and_initial_speed_by_hand() {
+        let two_pi = 2.0 * std::f64::consts::PI;
+        assert_eq!(horizon(1.0, two_pi), PERIODS);
+        assert_eq!(horizon(10.0, two_pi), 10.0);
+        assert_eq!(horizon(3.0, 0.0), 3.0);
+        let state = State::new(vec![0.0; 6], vec![3.0, -4.0, 0.0, 0.0, 0.0, 1.0]);
+        assert_eq!(initial_speed(&state), 5.0);
+    }
+}

@@ -1,0 +1,344 @@
+//! The numbers every derivation reports about itself (docs/math.md §8.6–8.7), recomputed
+//! outside the pipeline: mass totals (the D-NURBS's by the partition of unity), the frequency
+//! table against the eigenvalues of the lattice's own tangent stiffness and of the D-NURBS's
+//! `modes`, the validation's horizon and RMS from the two trajectories, the warnings against
+//! their thresholds, and the excitation fit's calibration, step limits and modal shares.
+
+use nurbspring_derive::{
+    Config, Derivation, DnurbsModes, FitOptions, InitialConditions, Method, PERIODS, Setup,
+    TimeSettings, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, derive_linear, derive_msm,
+};
+use nurbspring_dnurbs::{Constraints, DnurbsOptions, Geometry, Loads, Material};
+use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_linalg::generalized_symmetric_eigen;
+use nurbspring_msm::{Class, Constants, LatticeOptions, LinearKind, MsmModel, ParameterGrid};
+use nurbspring_sim::{DynamicModel, IntegratorKind};
+
+/// A wavy bicubic sheet over `[0, 2] × [0, 1.5]` (parameter domain the unit square), 6 × 5
+/// control points, the outer ring fixed, pushed down at 0.2.
+fn config(method: Method) -> Config {
+    // The linear derivations fit every element class (unit constants to start from), the
+    // paper's the spring classes.
+    let constants = if method == Method::Paper {
+        nurbspring_derive::paper::paper_constants()
+    } else {
+        Constants::from_pairs(
+            Class::linear(&LinearKind::ALL)
+                .into_iter()
+                .map(|c| (c, 1.0)),
+        )
+    };
+    let ku = KnotVector::clamped_uniform(3, 3).unwrap();
+    let kv = KnotVector::clamped_uniform(3, 2).unwrap();
+    let (gu, gv) = (ku.greville(), kv.greville());
+    let pts = gu
+        .iter()
+        .flat_map(|&u| {
+            gv.iter()
+                .map(move |&v| [2.0 * u, 1.5 * v, 0.1 * (3.0 * u).sin() * (2.0 * v).cos()])
+        })
+        .collect();
+    let surface = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 30]).unwrap();
+    Config {
+        method,
+        geometry: Geometry::Surface(surface),
+        material: Material {
+            mu: 2.0,
+            alpha11: 1.0,
+            alpha22: 1.0,
+            beta11: 0.01,
+            beta22: 0.01,
+            ..Material::default()
+        },
+        loads: Loads::default(),
+        constraints: Constraints {
+            fixed_rings: 1,
+            ..Constraints::default()
+        },
+        dnurbs: DnurbsOptions::default(),
+        lattice: LatticeOptions {
+            grid: ParameterGrid::Uniform {
+                nodes_u: 7,
+                nodes_v: 6,
+            },
+            constants,
+            ..LatticeOptions::default()
+        },
+        initial: InitialConditions {
+            velocities: vec![[0.0, 0.0, -0.2]],
+            ..InitialConditions::default()
+        },
+        time: TimeSettings {
+            dt: 0.01,
+            t_end: 0.5,
+            dnurbs_integrator: IntegratorKind::Newmark,
+            msm_integrator: IntegratorKind::SymplecticEuler,
+        },
+        fit: FitOptions::default(),
+        probes: vec![(0.5, 0.5)],
+        given: None,
+    }
+}
+
+/// Distinct values of a list in which each appears three times (x, y, z), ascending.
+fn distinct_of_triples(mut values: Vec<f64>) -> Vec<f64> {
+    values.sort_by(f64::total_cmp);
+    values.iter().step_by(3).copied().collect()
+}
+
+/// The distinct non-zero values, ascending (a spring lattice's modes are not triplets).
+fn distinct_non_zero(mut values: Vec<f64>) -> Vec<f64> {
+    values.sort_by(f64::total_cmp);
+    let mut out: Vec<f64> = Vec::new();
+    for w in values.into_iter().filter(|&w| w > 1e-6) {
+        if out.last().is_none_or(|&l| w - l > 1e-9 * w) {
+            out.push(w);
+        }
+    }
+    out
+}
+
+/// The lattice's angular frequencies from its own tangent stiffness and masses.
+fn lattice_frequencies(d: &Derivation) -> Vec<f64> {
+    let model = MsmModel::new(d.lattice.clone().unwrap()).unwrap();
+    let q0 = model.initial_positions().to_vec();
+    let k = model.tangent_stiffness(&q0).to_dense();
+    let m = model.mass().to_sparse().to_dense();
+    let e = generalized_symmetric_eigen(&k, &m).unwrap();
+    let omega = e.values.iter().map(|l| l.max(0.0).sqrt()).collect();
+    if d.method == Method::Paper {
+        distinct_non_zero(omega)
+    } else {
+        distinct_of_triples(omega)
+    }
+}
+
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * a.abs().max(b.abs())
+}
+
+fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
+    // Masses. Σ_ij M_ij over one component is ∫∫ μ Σ_i N_i Σ_j N_j = μ × (parameter measure 1).
+    let mass = &d.mass;
+    assert!(
+        close(mass.total_dnurbs, config.material.mu, 1e-12),
+        "{}",
+        mass.total_dnurbs
+    );
+    let lattice = d.lattice.as_ref().unwrap();
+    let total: f64 = lattice.masses.iter().sum();
+    let free: f64 = (0..lattice.n_nodes())
+        .filter(|&a| !lattice.fixed[a])
+        .map(|a| lattice.masses[a])
+        .sum();
+    assert!(close(mass.total_msm, total, 1e-12) && close(mass.free_msm, free, 1e-12));
+    let m = &setup.model().matrices().mass;
+    let fixed = setup.model().fixed_points();
+    let free_dnurbs: f64 = m
+        .triplets()
+        .filter(|&(i, _, _)| !fixed.contains(&(i / 3)))
+        .map(|(_, _, v)| v)
+        .sum::<f64>()
+        / 3.0;
+    assert!(close(mass.free_dnurbs, free_dnurbs, 1e-12));
+    assert!(mass.free_dnurbs < mass.total_dnurbs);
+
+    // The frequency table: the D-NURBS's from its own modes, the lattice's from its own K_T.
+    let dn_modes = setup.model().modes(3 * 8).unwrap();
+    let dnurbs = distinct_of_triples(dn_modes.omega.clone());
+    let msm = lattice_frequencies(d);
+    assert_eq!(d.frequencies.len(), 8);
+    for (i, row) in d.frequencies.iter().enumerate() {
+        assert_eq!(row.mode, i + 1);
+        assert!(
+            close(row.dnurbs, dnurbs[i], 1e-8),
+            "{i}: {} vs {}",
+            row.dnurbs,
+            dnurbs[i]
+        );
+        assert!(
+            close(row.msm, msm[i], 1e-8),
+            "{i}: {} vs {}",
+            row.msm,
+            msm[i]
+        );
+        assert!(close(
+            row.relative_difference,
+            row.msm / row.dnurbs - 1.0,
+            1e-12
+        ));
+        // MAC only where the lattice's modes are isotropic triplets (linear elements).
+        assert_eq!(row.mac.is_some(), config.method != Method::Paper);
+        if let Some(mac) = row.mac {
+            assert!((0.0..=1.0 + 1e-12).contains(&mac));
+        }
+    }
+
+    // The validation: the horizon covers PERIODS periods of the lowest mode, and the RMS is that
+    // of the central probe's distance between the runs.
+    let v = &d.derived.validation;
+    let omega1 = dnurbs[0];
+    let expected = config
+        .time
+        .t_end
+        .max(PERIODS * 2.0 * std::f64::consts::PI / omega1);
+    assert!(
+        close(v.horizon, expected, 1e-9),
+        "{} vs {expected}",
+        v.horizon
+    );
+    assert!(close(
+        DnurbsModes::new(setup, "test").unwrap().omega1(),
+        omega1,
+        1e-8
+    ));
+    let (r, o) = (&d.dnurbs_trajectory, &d.msm_trajectory);
+    let n = r.t.len();
+    assert_eq!(v.samples, n);
+    let sum: f64 = (0..n)
+        .map(|s| {
+            (0..3)
+                .map(|x| (r.probes[0][s][x] - o.probes[0][s][x]).powi(2))
+                .sum::<f64>()
+        })
+        .sum();
+    assert!(close(v.rms, (sum / n as f64).sqrt(), 1e-12));
+    let amplitude = r.probes[0]
+        .iter()
+        .map(|p| {
+            (0..3)
+                .map(|x| (p[x] - r.probes[0][0][x]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    assert!(close(v.dnurbs_amplitude, amplitude, 1e-12));
+    assert!(close(v.relative_rms, v.rms / amplitude, 1e-12));
+
+    // The warnings, each present exactly when its threshold is crossed, with its numbers.
+    let has = |text: &str| d.warnings.iter().any(|w| w.contains(text));
+    assert_eq!(
+        has("relative RMS against the D-NURBS"),
+        v.relative_rms > WARN_RELATIVE_RMS,
+        "{:?}",
+        d.warnings
+    );
+    if v.relative_rms > WARN_RELATIVE_RMS {
+        assert!(
+            has(&format!("{:.1}%", 100.0 * v.relative_rms)),
+            "{:?}",
+            d.warnings
+        );
+    }
+    let first = &d.frequencies[0];
+    assert_eq!(
+        has("the lowest frequency is off"),
+        first.relative_difference.abs() > WARN_FREQUENCY
+    );
+    let ratio = mass.free_msm / mass.free_dnurbs;
+    assert_eq!(
+        has("the free nodes carry"),
+        !(1.0 / WARN_MASS_FACTOR..=WARN_MASS_FACTOR).contains(&ratio)
+    );
+    assert_eq!(
+        has("under the second excitation"),
+        d.second_excitation.relative_rms > 2.0 * WARN_RELATIVE_RMS
+    );
+}
+
+#[test]
+fn the_modal_derivation_reports_its_own_numbers() {
+    let config = config(Method::Modal);
+    let (d, setup) = derive_linear(&config, None).unwrap();
+    check_judgement(&d, &setup, &config);
+    // The modal fit calibrates the lowest frequency.
+    assert!(d.frequencies[0].relative_difference.abs() < 1e-8);
+}
+
+/// The paper's rule on the same sheet: a lattice far too light, so the mass warning must be
+/// there, with the ratio.
+#[test]
+fn the_paper_derivation_reports_its_own_numbers() {
+    let mut config = config(Method::Paper);
+    config.lattice.grid = ParameterGrid::Greville;
+    let (d, setup) = derive_msm(&config, None, &mut |_, _| {}).unwrap();
+    let ratio = d.mass.free_msm / d.mass.free_dnurbs;
+    assert!(ratio < 1.0 / WARN_MASS_FACTOR, "{ratio}");
+    assert!(
+        d.warnings
+            .iter()
+            .any(|w| w.contains(&format!("({ratio:.3}×)"))),
+        "{:?}",
+        d.warnings
+    );
+    // The paper's lattice has springs only: at rest the frequency table is of K_T too.
+    check_judgement(&d, &setup, &config);
+}
+
+/// The excitation fit: after its calibration the lattice's lowest frequency is the D-NURBS's;
+/// its step limits are `2/ω_max` of the modal fit's lattice and of its own; the modes it
+/// weights are the most excited, with shares of the modal amplitudes of a free oscillation,
+/// `a² = |φᵀM u₀ − φᵀf/λ|² + |φᵀM v₀|²/ω²`, summed over x, y, z, over all modes.
+#[test]
+fn the_excitation_derivation_reports_its_own_numbers() {
+    let config = config(Method::Excitation);
+    let (d, setup) = derive_linear(&config, None).unwrap();
+    check_judgement(&d, &setup, &config);
+    assert!(d.frequencies[0].relative_difference.abs() < 1e-8);
+    let nurbspring_derive::FitDetail::Excitation(report) = &d.fit else {
+        panic!("an excitation report expected");
+    };
+    assert!(report.residual.1 <= report.residual.0);
+    let omega_max = *lattice_frequencies(&d).last().unwrap();
+    assert!(
+        close(report.dt_critical.1, 2.0 / omega_max, 1e-6),
+        "{} vs {}",
+        report.dt_critical.1,
+        2.0 / omega_max
+    );
+
+    let modes = DnurbsModes::new(&setup, "test").unwrap();
+    let (sys, basis) = (&modes.system, &modes.basis);
+    let apply = |v: &[[f64; 3]], x: usize| {
+        let col: Vec<f64> = v.iter().map(|p| p[x]).collect();
+        let mut y = vec![0.0; col.len()];
+        sys.mass.mul_vec(&col, &mut y);
+        y
+    };
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let mut amplitudes: Vec<(usize, f64)> = (0..basis.len())
+        .filter(|&i| basis.omega[i] > 0.0)
+        .map(|i| {
+            let phi = basis.mode(i);
+            let a2 = (0..3)
+                .map(|x| {
+                    let load: Vec<f64> = sys.load.iter().map(|f| f[x]).collect();
+                    let e0 = dot(&phi, &apply(&sys.displacement, x))
+                        - dot(&phi, &load) / basis.lambda[i];
+                    let e1 = dot(&phi, &apply(&sys.velocity, x)) / basis.omega[i];
+                    e0 * e0 + e1 * e1
+                })
+                .sum::<f64>();
+            (i + 1, a2)
+        })
+        .collect();
+    let total: f64 = amplitudes.iter().map(|a| a.1).sum();
+    amplitudes.sort_by(|a, b| b.1.total_cmp(&a.1));
+    assert_eq!(report.modes.len(), 8);
+    for ((mode, share), (i, a2)) in report.modes.iter().zip(&amplitudes) {
+        assert_eq!(mode, i);
+        assert!(
+            close(*share, a2 / total, 1e-9),
+            "mode {mode}: {share} vs {}",
+            a2 / total
+        );
+    }
+    // No constant left the range and the step did not shrink: no over-fitting warning.
+    let overfit = d.warnings.iter().any(|w| w.contains("the excitation fit"));
+    let shrunk = report.dt_critical.1 < report.dt_critical.0 / 10.0;
+    let moved = report.classes.iter().any(|&c| {
+        let (k, k0) = (report.constants.value(c), report.modal_constants.value(c));
+        k > 1e3 * k0 || k < k0 / 1e3
+    });
+    assert_eq!(overfit, shrunk || moved);
+}
