@@ -568,3 +568,64 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `f(x, y) = (x − 1)² + 10 (y + 2)²` from the origin: the minimum (1, −2) to 1e-6 within
+    /// 400 evaluations; Rosenbrock's `(1 − x)² + 100 (y − x²)²` from (−1.2, 1), its curved
+    /// valley, to (1, 1) within 2000 evaluations (the Lagarias coefficients need about 300).
+    #[test]
+    fn nelder_mead_finds_the_minima_of_a_quadratic_and_of_rosenbrock() {
+        let quadratic = |x: &[f64]| (x[0] - 1.0).powi(2) + 10.0 * (x[1] + 2.0).powi(2);
+        let (x, fx) = nelder_mead(&quadratic, &[0.0, 0.0], 0.5, 400);
+        assert!(
+            (x[0] - 1.0).abs() < 1e-6 && (x[1] + 2.0).abs() < 1e-6,
+            "{x:?}"
+        );
+        assert_eq!(fx, quadratic(&x));
+        let rosenbrock = |x: &[f64]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
+        let (x, fx) = nelder_mead(&rosenbrock, &[-1.2, 1.0], 0.5, 2000);
+        assert!(
+            (x[0] - 1.0).abs() < 1e-5 && (x[1] - 1.0).abs() < 1e-5,
+            "{x:?}, f = {fx:e}"
+        );
+        // Too small a budget stops early, at the best point seen.
+        let (x, fx) = nelder_mead(&rosenbrock, &[-1.2, 1.0], 0.5, 20);
+        assert!(fx < rosenbrock(&[-1.2, 1.0]) && fx > 1e-3, "{x:?} {fx}");
+    }
+
+    fn matrix(rows: [[f64; 2]; 2]) -> DenseMatrix {
+        DenseMatrix::from_fn(2, 2, |i, j| rows[i][j])
+    }
+
+    /// Inside the radius the step is Newton's, `s = −H⁻¹g`; on the boundary `‖s‖ = Δ` and
+    /// `(H + λI)s = −g` with `λ ≥ max(0, −λ_min(H))` (the optimality conditions of Moré and
+    /// Sorensen), also for an indefinite H.
+    #[test]
+    fn trust_region_steps_satisfy_the_optimality_conditions() {
+        let h = matrix([[4.0, 1.0], [1.0, 3.0]]);
+        let g = [1.0, -2.0];
+        // H⁻¹ = [[3, −1], [−1, 4]] / 11.
+        let newton = [
+            -(3.0 * 1.0 - 1.0 * -2.0) / 11.0,
+            -(-1.0 * 1.0 + 4.0 * -2.0) / 11.0,
+        ];
+        let s = trust_region_step(&h, &g, 10.0).unwrap();
+        assert!((s[0] - newton[0]).abs() < 1e-15 && (s[1] - newton[1]).abs() < 1e-15);
+        // The indefinite one's eigenvalues are (−1 ± √10)/2.
+        let indefinite = matrix([[-2.0, 0.5], [0.5, 1.0]]);
+        for (h, lam_min) in [(h, 0.0), (indefinite, (-1.0 - 10f64.sqrt()) / 2.0)] {
+            for radius in [0.05, 0.3] {
+                let s = trust_region_step(&h, &g, radius).unwrap();
+                assert!((norm(&s) - radius).abs() < 1e-12 * radius, "{s:?}");
+                let hs = h.mul_vec(&s);
+                // λ from the first component, then the second must agree.
+                let lam = -(hs[0] + g[0]) / s[0];
+                assert!((hs[1] + g[1] + lam * s[1]).abs() < 1e-9, "λ = {lam}");
+                assert!(lam >= -lam_min - 1e-9 && lam >= 0.0, "λ = {lam}");
+            }
+        }
+    }
+}

@@ -205,6 +205,38 @@ fn dependent_classes_are_named() {
     assert!(err.to_string().contains("bend"), "{err}");
 }
 
+/// Identifiability does not depend on the size of the classes' matrices: two independent
+/// classes whose Gram entries are ~10⁻¹² (unit matrices scaled by 10⁻⁶) fit, and return the
+/// constants of a target made from them.
+#[test]
+fn identifiability_is_judged_on_the_normalized_gram_matrix() {
+    let a = SparseMatrix::from_triplets(3, 3, &[(0, 0, 1e-6), (1, 1, 2e-6)]).unwrap();
+    let b = SparseMatrix::from_triplets(
+        3,
+        3,
+        &[(1, 1, 1e-6), (2, 2, 1e-6), (1, 2, -5e-7), (2, 1, -5e-7)],
+    )
+    .unwrap();
+    let k_d = SparseMatrix::linear_combination(3.0, &a, 0.5, &b).unwrap();
+    let omega = SparseMatrix::identity(3);
+    let fit = StiffnessFit::new(
+        &k_d,
+        &omega,
+        &[
+            (Class::Spring(SpringKind::Structural), a),
+            (Class::Spring(SpringKind::Shear), b),
+        ],
+        10,
+        None,
+    )
+    .unwrap();
+    let k = fit.solve(false).unwrap();
+    assert!(
+        (k[0] - 3.0).abs() < 1e-10 && (k[1] - 0.5).abs() < 1e-10,
+        "{k:?}"
+    );
+}
+
 #[test]
 fn too_few_springs_is_an_error() {
     let g = SparseMatrix::identity(3);
