@@ -607,11 +607,8 @@ mod tests {
     fn trust_region_steps_satisfy_the_optimality_conditions() {
         let h = matrix([[4.0, 1.0], [1.0, 3.0]]);
         let g = [1.0, -2.0];
-        // H⁻¹ = [[3, −1], [−1, 4]] / 11.
-        let newton = [
-            -(3.0 * 1.0 - 1.0 * -2.0) / 11.0,
-            -(-1.0 * 1.0 + 4.0 * -2.0) / 11.0,
-        ];
+        // H⁻¹ = [[3, −1], [−1, 4]] / 11, so −H⁻¹g = (−5, 9)/11.
+        let newton = [-5.0 / 11.0, 9.0 / 11.0];
         let s = trust_region_step(&h, &g, 10.0).unwrap();
         assert!((s[0] - newton[0]).abs() < 1e-15 && (s[1] - newton[1]).abs() < 1e-15);
         // The indefinite one's eigenvalues are (−1 ± √10)/2.
