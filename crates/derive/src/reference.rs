@@ -124,3 +124,24 @@ pub fn scalar_rows(a: &SparseMatrix) -> SparseMatrix {
     let cols: Vec<usize> = (0..a.ncols() / 3).map(|c| 3 * c).collect();
     a.submatrix(&rows, &cols)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `⌈horizon/Δt⌉` steps of the scene's Δt, the last at or past the horizon; past
+    /// [`MAX_SAMPLES`] steps, that many steps of `horizon / MAX_SAMPLES`.
+    #[test]
+    fn sample_times_by_hand() {
+        let (dt, t) = sample_times(1.0, 0.25);
+        assert_eq!((dt, t), (0.25, vec![0.0, 0.25, 0.5, 0.75, 1.0]));
+        let (dt, t) = sample_times(1.0, 0.3);
+        assert_eq!(dt, 0.3);
+        assert_eq!(t.len(), 5);
+        assert!((t[4] - 1.2).abs() < 1e-15);
+        let (dt, t) = sample_times(4.0, 1e-5);
+        assert_eq!(dt, 4.0 / MAX_SAMPLES as f64);
+        assert_eq!(t.len(), MAX_SAMPLES + 1);
+        assert!((t[MAX_SAMPLES] - 4.0).abs() < 1e-12);
+    }
+}

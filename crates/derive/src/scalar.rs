@@ -180,3 +180,51 @@ pub(crate) fn apply3(a: &SparseMatrix, x: &[[f64; 3]]) -> Vec<[f64; 3]> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two points, `M = [[2, 0], [0, 3]]`, `K = [[2, −1], [−1, 2]]`, an energy origin with
+    /// elastic 0.5, internal force `r` and load `f`: by hand at `u`, `v`,
+    /// kinetic `½ Σ_x vₓᵀ M vₓ`, elastic `0.5 + Σ rᵀu + ½ Σ uₓᵀ K uₓ`, external `e − Σ fᵀu`.
+    #[test]
+    fn energies_by_hand() {
+        let mass = SparseMatrix::from_diagonal(&[2.0, 3.0]);
+        let stiffness = SparseMatrix::from_triplets(
+            2,
+            2,
+            &[(0, 0, 2.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 2.0)],
+        )
+        .unwrap();
+        let sys = ScalarSystem {
+            free: vec![4, 7],
+            mass,
+            stiffness,
+            damping_ratio: 0.0,
+            load: vec![[0.0; 3]; 2],
+            displacement: vec![[0.0; 3]; 2],
+            velocity: vec![[0.0; 3]; 2],
+            energy: EnergyOrigin {
+                elastic: 0.5,
+                internal: vec![[1.0, 0.0, -1.0], [0.0, 2.0, 0.0]],
+                external: 0.25,
+                force: vec![[0.0, 0.0, -3.0], [1.0, 0.0, 0.0]],
+            },
+        };
+        let u = [[1.0, 0.0, 2.0], [-1.0, 0.5, 0.0]];
+        let v = [[0.0, 1.0, 0.0], [2.0, 0.0, -1.0]];
+        // Kinetic: x: 3·4 = 12; y: 2·1 = 2; z: 3·1 = 3 → ½·17.
+        // Elastic: rᵀu = 1 − 2 + 1 = 0; uᵀKu per component: x (1, −1): 2 + 2 + 2 = 6,
+        // y (0, 0.5): 0.5, z (2, 0): 8 → 0.5 + 0 + ½·14.5.
+        // External: 0.25 − (−6 − 1) = 7.25.
+        let [kinetic, elastic, external] = sys.energies(&u, &v);
+        assert_eq!(kinetic, 8.5);
+        assert_eq!(elastic, 0.5 + 7.25);
+        assert_eq!(external, 7.25);
+        assert_eq!(dot(&u, &v), 0.0 + 0.0 + 0.0 - 2.0 + 0.0 + 0.0);
+        // A load's origin: external potential fᵀu₀, no elastic part.
+        let origin = EnergyOrigin::of_load(&sys.energy.force, &u);
+        assert_eq!((origin.elastic, origin.external), (0.0, -6.0 - 1.0));
+    }
+}

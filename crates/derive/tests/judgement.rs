@@ -118,6 +118,14 @@ fn close(a: f64, b: f64, rel: f64) -> bool {
 }
 
 fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
+    assert_eq!(config.method.is_linear(), config.method != Method::Paper);
+    // The probe is the lattice node nearest the asked parameter, reported at its own.
+    let lattice = d.lattice.as_ref().unwrap();
+    let params = lattice.params.as_ref().unwrap();
+    assert_eq!(d.probe_nodes, setup.probe_nodes());
+    assert_eq!(d.probes, setup.probes());
+    assert_eq!(d.probes[0], params[d.probe_nodes[0]]);
+    assert_eq!(d.probe_nodes[0], lattice.node_nearest(0.5, 0.5));
     // Masses. Σ_ij M_ij over one component is ∫∫ μ Σ_i N_i Σ_j N_j = μ × (parameter measure 1).
     let mass = &d.mass;
     assert!(
