@@ -423,48 +423,10 @@ pub fn warnings(
 
 #[cfg(test)]
 mod tests {
-    use nurbspring_dnurbs::{Constraints, DnurbsOptions, Loads, Material};
     use nurbspring_geom::{KnotVector, NurbsCurve, NurbsSurface};
-    use nurbspring_msm::LatticeOptions;
-    use nurbspring_sim::IntegratorKind;
 
     use super::*;
-    use crate::setup::{Config, FitOptions, InitialConditions, TimeSettings};
-
-    fn setup(geometry: Geometry) -> Setup {
-        let alpha22 = if geometry.is_curve() { 0.0 } else { 1.0 };
-        let config = Config {
-            method: Method::Paper,
-            geometry,
-            material: Material {
-                mu: 1.0,
-                alpha11: 1.0,
-                alpha22,
-                ..Material::default()
-            },
-            loads: Loads::default(),
-            constraints: Constraints {
-                fixed_rings: 1,
-                ..Constraints::default()
-            },
-            dnurbs: DnurbsOptions::default(),
-            lattice: LatticeOptions {
-                constants: crate::paper::paper_constants(),
-                ..LatticeOptions::default()
-            },
-            initial: InitialConditions::default(),
-            time: TimeSettings {
-                dt: 0.01,
-                t_end: 0.1,
-                dnurbs_integrator: IntegratorKind::Newmark,
-                msm_integrator: IntegratorKind::SymplecticEuler,
-            },
-            fit: FitOptions::default(),
-            probes: vec![(0.5, 0.5)],
-            given: None,
-        };
-        Setup::new(&config).unwrap()
-    }
+    use crate::test_scenes::setup;
 
     fn unit(a: [f64; 3]) -> [f64; 3] {
         let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();

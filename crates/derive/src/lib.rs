@@ -51,6 +51,8 @@ mod reference;
 mod runner;
 mod scalar;
 mod setup;
+#[cfg(test)]
+mod test_scenes;
 mod validation;
 
 pub use error::DeriveError;

@@ -944,3 +944,84 @@ fn fmt_period(p: Option<f64>) -> String {
     p.map(|x| format!("{x:.3} s"))
         .unwrap_or_else(|| "none".to_string())
 }
+
+#[cfg(test)]
+mod tests {
+    use nurbspring_geom::{KnotVector, NurbsSurface};
+    use nurbspring_linalg::DenseMatrix;
+
+    use super::*;
+    use crate::test_scenes::setup;
+
+    /// `‖N K N‖_F / ‖K‖_F` with `N = diag(n_a n_aᵀ)` built densely from unit normals taken
+    /// from central differences of the surface.
+    fn share_by_definition(setup: &Setup, surface: &NurbsSurface) -> f64 {
+        let lattice = setup.lattice_with(&paper_constants(), PAPER_M);
+        let k = lattice
+            .tangent_stiffness(&lattice.flat_positions())
+            .to_dense();
+        let n = k.nrows();
+        let mut proj = DenseMatrix::zeros(n, n);
+        let h = 1e-6;
+        for (a, &(u, v)) in lattice.params.as_ref().unwrap().iter().enumerate() {
+            let p = |u: f64, v: f64| surface.point(u.clamp(0.0, 1.0), v.clamp(0.0, 1.0)).unwrap();
+            let (u0, u1, v0, v1) = (
+                (u - h).max(0.0),
+                (u + h).min(1.0),
+                (v - h).max(0.0),
+                (v + h).min(1.0),
+            );
+            let su = [0, 1, 2].map(|x| p(u1, v)[x] - p(u0, v)[x]);
+            let sv = [0, 1, 2].map(|x| p(u, v1)[x] - p(u, v0)[x]);
+            let c = cross(su, sv);
+            let len = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+            for x in 0..3 {
+                for y in 0..3 {
+                    proj[(3 * a + x, 3 * a + y)] = c[x] * c[y] / (len * len);
+                }
+            }
+        }
+        let nkn = proj.matmul(&k).matmul(&proj);
+        let frobenius = |m: &DenseMatrix| m.data().iter().map(|v| v * v).sum::<f64>().sqrt();
+        frobenius(&nkn) / frobenius(&k)
+    }
+
+    /// On a flat net the springs at rest have no stiffness along the normal (share 0); on a
+    /// doubly curved one the share is that of the definition (to the O(h) of the one-sided
+    /// differences at the boundary nodes).
+    #[test]
+    fn normal_stiffness_share_against_its_definition() {
+        let (ku, kv) = (
+            KnotVector::clamped_uniform(2, 3).unwrap(),
+            KnotVector::clamped_uniform(2, 2).unwrap(),
+        );
+        let (gu, gv) = (ku.greville(), kv.greville());
+        for curved in [false, true] {
+            let pts = gu
+                .iter()
+                .flat_map(|&u| {
+                    gv.iter().map(move |&v| {
+                        let z = if curved {
+                            0.8 * u * u - 0.5 * v * v + 0.3 * u * v
+                        } else {
+                            0.0
+                        };
+                        [2.0 * u, 1.5 * v, z]
+                    })
+                })
+                .collect();
+            let s = NurbsSurface::try_new(ku.clone(), kv.clone(), pts, vec![1.0; 20]).unwrap();
+            let setup = setup(Geometry::Surface(s.clone()));
+            let share = normal_stiffness_share(&setup).unwrap();
+            let expected = share_by_definition(&setup, &s);
+            if curved {
+                assert!(
+                    share > 1e-3 && (share - expected).abs() < 1e-5 * expected,
+                    "{share} vs {expected}"
+                );
+            } else {
+                assert!(share < 1e-15 && expected < 1e-15, "{share}, {expected}");
+            }
+        }
+    }
+}

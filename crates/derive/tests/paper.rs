@@ -172,3 +172,36 @@ fn the_scaled_uniform_limit_schedules_like_the_model_of_each_mass() {
         (Schedule::plain(IntegratorKind::Newmark), None)
     );
 }
+
+/// `greville_net` puts control point (i, j) at the Greville abscissae (ξ_i, η_j) mapped
+/// affinely from the parameter domain onto the net's x-y bounding box, z kept: by hand on a
+/// net over a domain that does not start at 0, `[1, 3] × [2, 5]`.
+#[test]
+fn greville_net_maps_the_abscissae_onto_the_bounding_box() {
+    let ku = KnotVector::try_new(vec![1., 1., 1., 2., 3., 3., 3.], 2).unwrap();
+    let kv = KnotVector::try_new(vec![2., 2., 5., 5.], 1).unwrap();
+    // x in [−1, 4], y in [0.5, 2.5] (the extremes at scattered points).
+    let pts: Vec<[f64; 3]> = (0..8)
+        .map(|k| {
+            let (i, j) = (k / 2, k % 2);
+            let x = [-1.0, 1.0, 4.0, 2.0][i];
+            let y = [0.5, 2.5][j] + 0.1 * (i % 2) as f64 * (1 - j) as f64;
+            [x, y, 0.3 * k as f64]
+        })
+        .collect();
+    let s = NurbsSurface::try_new(ku, kv, pts.clone(), vec![1.0; 8]).unwrap();
+    let g = greville_net(&s).unwrap();
+    // Greville abscissae: u (1, 1.5, 2.5, 3), v (2, 5).
+    let xi = [1.0, 1.5, 2.5, 3.0];
+    let eta = [2.0, 5.0];
+    for (k, p) in g.control_points().iter().enumerate() {
+        let (i, j) = (k / 2, k % 2);
+        let x = -1.0 + 5.0 * (xi[i] - 1.0) / 2.0;
+        let y = 0.5 + 2.0 * (eta[j] - 2.0) / 3.0;
+        assert!(
+            (p[0] - x).abs() < 1e-14 && (p[1] - y).abs() < 1e-14,
+            "{k}: {p:?}"
+        );
+        assert_eq!(p[2], pts[k][2]);
+    }
+}
