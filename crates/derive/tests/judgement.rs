@@ -5,8 +5,9 @@
 //! their thresholds, and the excitation fit's calibration, step limits and modal shares.
 
 use nurbspring_derive::{
-    Config, Derivation, DnurbsModes, FitOptions, InitialConditions, Method, PERIODS, Setup,
-    TimeSettings, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, derive_linear, derive_msm,
+    Config, Derivation, DnurbsModes, FitDofs, FitOptions, InitialConditions, Method, PERIODS,
+    Setup, TimeSettings, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, derive_linear,
+    derive_msm,
 };
 use nurbspring_dnurbs::{Constraints, DnurbsOptions, Geometry, Integration, Loads, Material};
 use nurbspring_geom::{KnotVector, NurbsSurface};
@@ -242,6 +243,18 @@ fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
         }
     }
 
+    // The stability figures: ω_max of the lattice itself, Δt_crit = 2/ω_max, and whether the
+    // scene's step exceeds it.
+    let p = &d.derived;
+    let omega_max = *msm.last().unwrap();
+    assert!(
+        close(p.omega_max, omega_max, 1e-8),
+        "{} vs {omega_max}",
+        p.omega_max
+    );
+    assert!(close(p.dt_critical, 2.0 / omega_max, 1e-8));
+    assert_eq!(p.dt_exceeds_explicit_limit, config.time.dt >= p.dt_critical);
+
     // The validation: the horizon covers PERIODS periods of the lowest mode, and the RMS is that
     // of the central probe's distance between the runs.
     let v = &d.derived.validation;
@@ -341,6 +354,37 @@ fn the_paper_derivation_reports_its_own_numbers() {
     );
     // The paper's lattice has springs only: at rest the frequency table is of K_T too.
     check_judgement(&d, &setup, &config);
+    // A spring cannot have a negative constant: the derived constants are the unconstrained
+    // optimum of the selected dofs when it has none, the k ≥ 0 one otherwise, and each class
+    // held at 0 is named.
+    let fit = d.paper_fit().unwrap();
+    let (unconstrained, nonnegative) = match config.fit.dofs {
+        FitDofs::All => (&fit.all_dofs, &fit.all_dofs_nonnegative),
+        FitDofs::Free => (&fit.free_dofs, &fit.free_dofs_nonnegative),
+    };
+    let negative: Vec<_> = fit
+        .classes
+        .iter()
+        .filter(|&&c| unconstrained.constants.value(c) < 0.0)
+        .collect();
+    let expected = if negative.is_empty() {
+        unconstrained
+    } else {
+        nonnegative
+    };
+    for &c in &fit.classes {
+        assert_eq!(
+            d.derived.constants.value(c),
+            expected.constants.value(c),
+            "{c:?}"
+        );
+        assert!(d.derived.constants.value(c) >= 0.0);
+    }
+    // The mass scan reports its progress once per candidate, in order.
+    let mut calls = Vec::new();
+    derive_msm(&config, None, &mut |k, n| calls.push((k, n))).unwrap();
+    let n = d.mass.candidates.len();
+    assert_eq!(calls, (1..=n).map(|k| (k, n)).collect::<Vec<_>>());
 }
 
 /// The excitation fit: after its calibration the lattice's lowest frequency is the D-NURBS's;
