@@ -189,6 +189,17 @@ fn inconsistent_linear_constraints_are_refused() {
         }
         other => panic!("expected InvalidConstraint, got {other:?}"),
     }
+    // Rows equal to within the rank tolerance but with other right-hand sides are refused too.
+    let nearly = LinearConstraint {
+        terms: vec![(z12, 1.0 + 1e-14)],
+        rhs: 2.7,
+    };
+    match paper_with(vec![fix(2.5), nearly]) {
+        Err(DnurbsError::InvalidConstraint { detail }) => {
+            assert!(detail.contains("inconsistent"), "{detail}")
+        }
+        other => panic!("expected InvalidConstraint, got {other:?}"),
+    }
 }
 
 /// `max(‖M_g − M_{g+1}‖/‖M_{g+1}‖, ‖K_g − K_{g+1}‖/‖K_{g+1}‖)` for unit coefficients (μ,
