@@ -332,3 +332,38 @@ fn rational_stepper_runs_to_the_nearest_step() {
         assert_eq!(stepper.state().t, 0.5 * steps as f64);
     }
 }
+
+/// `assemble_scalar` ignores `weights_as_dofs` (the scalar matrices are of constant weights):
+/// the same matrices either way, and `M = S_M ⊗ I₃` against `assemble`.
+#[test]
+fn scalar_assembly_ignores_weights_as_dofs() {
+    let geometry = Geometry::Surface(support::paper_surface());
+    let material = support::paper_material();
+    let plain = nurbspring_dnurbs::assemble_scalar(&geometry, &material, &DnurbsOptions::default())
+        .unwrap();
+    let options = DnurbsOptions {
+        weights_as_dofs: true,
+        ..DnurbsOptions::default()
+    };
+    let asked = nurbspring_dnurbs::assemble_scalar(&geometry, &material, &options).unwrap();
+    assert_eq!(plain.mass.to_dense().data(), asked.mass.to_dense().data());
+    assert_eq!(
+        plain.stiffness.to_dense().data(),
+        asked.stiffness.to_dense().data()
+    );
+    let full = assemble(
+        &geometry,
+        &material,
+        &Loads::default(),
+        &DnurbsOptions::default(),
+    )
+    .unwrap();
+    let (s, m) = (plain.mass.to_dense(), full.mass.to_dense());
+    for i in 0..35 {
+        for j in 0..35 {
+            for x in 0..3 {
+                assert!((m[(3 * i + x, 3 * j + x)] - s[(i, j)]).abs() <= 1e-15 * s[(i, i)].abs());
+            }
+        }
+    }
+}
