@@ -4,7 +4,10 @@
 #   scripts/mutants.sh                 every package, the whole budget split between them
 #   scripts/mutants.sh geom dnurbs     only these packages
 #   BUDGET=7200 JOBS=2 scripts/mutants.sh
-#   SHARD=3/8 scripts/mutants.sh sim   one shard of the mutants of a package (for nightly rotation)
+#   SHARD=3/10 scripts/mutants.sh sim  one tenth of a package's mutants, every file sampled
+#                                      (round-robin; for a nightly rotation)
+#   RETEST=mutants.out/sim/mutants.out/missed.txt scripts/mutants.sh sim
+#                                      only the mutants of a missed list (after new tests)
 #
 # Configuration: .cargo/mutants.toml. Output: mutants.out/<package>/ (outcomes.json,
 # caught.txt, missed.txt, timeout.txt, unviable.txt). Requires `cargo install cargo-mutants`.
@@ -14,6 +17,7 @@ cd "$(dirname "$0")/.."
 BUDGET=${BUDGET:-14400}          # seconds for the whole run
 JOBS=${JOBS:-1}                  # parallel mutants (each builds its own copy of the tree)
 SHARD=${SHARD:-}
+RETEST=${RETEST:-}
 packages=("$@")
 if [ ${#packages[@]} -eq 0 ]; then
     packages=(geom dnurbs msm sim derive io)
@@ -23,12 +27,18 @@ export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-target/mutants}
 
 status=0
 for p in "${packages[@]}"; do
-    args=(--package "nurbspring-$p" --jobs "$JOBS" --output "mutants.out/$p" --no-shuffle)
+    out="mutants.out/$p${RETEST:+-retest}"
+    args=(--package "nurbspring-$p" --jobs "$JOBS" --output "$out" --no-shuffle)
     if [ "$p" = io ]; then
         args+=(--file crates/io/src/atomic.rs)
     fi
     if [ -n "$SHARD" ]; then
-        args+=(--shard "$SHARD")
+        args+=(--shard "$SHARD" --sharding round-robin)
+    fi
+    if [ -n "$RETEST" ]; then
+        # One anchored regex of the listed names (cargo-mutants' --re matches `--list` names).
+        regex=$(python3 -c 'import re, sys; print("^(" + "|".join(re.escape(l.strip()) for l in open(sys.argv[1]) if l.strip()) + ")$")' "$RETEST")
+        args+=(--re "$regex")
     fi
     echo "== nurbspring-$p (budget ${per_package}s)"
     # timeout ends the run at the budget; what finished is kept in mutants.out/$p.
@@ -38,13 +48,13 @@ for p in "${packages[@]}"; do
     set -e
     case $rc in
         0) ;;                       # every mutant caught
-        2) status=2 ;;              # some mutants missed: see mutants.out/$p/missed.txt
-        124|130) echo "   budget reached; partial results in mutants.out/$p" ;;
+        2) status=2 ;;              # some mutants missed: see $out/mutants.out/missed.txt
+        124|130) echo "   budget reached; partial results in $out" ;;
         *) echo "   cargo mutants exited with $rc"; status=$rc ;;
     esac
-    if [ -f "mutants.out/$p/mutants.out/outcomes.json" ] || [ -f "mutants.out/$p/outcomes.json" ]; then
+    if [ -f "$out/mutants.out/outcomes.json" ] || [ -f "$out/outcomes.json" ]; then
         for f in caught missed timeout unviable; do
-            file=$(ls "mutants.out/$p"/{,mutants.out/}$f.txt 2>/dev/null | head -1 || true)
+            file=$(ls "$out"/{,mutants.out/}$f.txt 2>/dev/null | head -1 || true)
             [ -n "$file" ] && printf '   %-8s %s\n' "$f" "$(wc -l < "$file")"
         done
     fi
