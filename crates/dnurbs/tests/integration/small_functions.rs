@@ -202,15 +202,16 @@ fn inconsistent_linear_constraints_are_refused() {
     }
 }
 
-/// `max(‖M_g − M_{g+1}‖/‖M_{g+1}‖, ‖K_g − K_{g+1}‖/‖K_{g+1}‖)` for unit coefficients (μ,
-/// α11, β11 on a curve), recomputed here from the assembled matrices.
-fn estimate(curve: &Geometry, g: usize) -> (f64, f64) {
+/// `max(‖M_g − M_{g+1}‖/‖M_{g+1}‖, ‖K_g − K_{g+1}‖/‖K_{g+1}‖)` for unit coefficients (μ;
+/// α11, β11 on a curve; α11, α22, β11, β12, β22 on a surface), recomputed here from the
+/// assembled matrices.
+fn estimate(geometry: &Geometry, g: usize) -> (f64, f64) {
     let at = |material: &Material, g| {
         let options = DnurbsOptions {
             quadrature_points: Some(g),
             ..DnurbsOptions::default()
         };
-        assemble(curve, material, &Loads::default(), &options).unwrap()
+        assemble(geometry, material, &Loads::default(), &options).unwrap()
     };
     let rel = |a: &SparseMatrix, b: &SparseMatrix| {
         SparseMatrix::linear_combination(1.0, a, -1.0, b)
@@ -222,10 +223,21 @@ fn estimate(curve: &Geometry, g: usize) -> (f64, f64) {
         mu: 1.0,
         ..Material::default()
     };
-    let stiffness = Material {
-        alpha11: 1.0,
-        beta11: 1.0,
-        ..Material::default()
+    let stiffness = if geometry.is_curve() {
+        Material {
+            alpha11: 1.0,
+            beta11: 1.0,
+            ..Material::default()
+        }
+    } else {
+        Material {
+            alpha11: 1.0,
+            alpha22: 1.0,
+            beta11: 1.0,
+            beta12: 1.0,
+            beta22: 1.0,
+            ..Material::default()
+        }
     };
     (
         rel(&at(&mass, g).mass, &at(&mass, g + 1).mass),
@@ -366,4 +378,31 @@ fn scalar_assembly_ignores_weights_as_dofs() {
             }
         }
     }
+}
+
+/// The same on a rational surface, at rules 2 to 8: every unit term enters the stiffness
+/// change (one left out changes it by 10⁻⁴ to 10⁻³ of itself), and the mass the rest.
+#[test]
+fn quadrature_estimate_of_a_rational_surface_counts_every_term() {
+    let surface = Geometry::Surface(support::wavy_rational_patch());
+    let (mut mass_larger, mut stiffness_larger) = (false, false);
+    for g in 2..9 {
+        let options = DnurbsOptions {
+            quadrature_points: Some(g),
+            ..DnurbsOptions::default()
+        };
+        let choice = options.quadrature_for(&surface).unwrap();
+        let (dm, dk) = estimate(&surface, g);
+        let expected = dm.max(dk);
+        assert!(
+            (choice.estimated_error - expected).abs() <= 1e-6 * expected,
+            "g = {g}: {} vs {expected} (mass {dm:e}, stiffness {dk:e})",
+            choice.estimated_error
+        );
+        mass_larger |= dm > 1.1 * dk;
+        stiffness_larger |= dk > 1.1 * dm;
+    }
+    // On this patch each of the two decides the estimate at some rule (measured: the mass at
+    // g = 4, 5; the stiffness at g = 6, 7), so neither can be dropped unseen.
+    assert!(mass_larger && stiffness_larger);
 }
