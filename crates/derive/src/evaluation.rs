@@ -440,31 +440,33 @@ mod tests {
     }
 
     /// On a doubly curved bicubic patch the impulse moves the one free control point whose
-    /// Greville point is nearest (0.3, 0.35) of the domain, along the unit normal of the
+    /// Greville point is nearest the point at fractions (0.3, 0.35) of the domain, along the unit normal of the
     /// surface there (checked against the cross product of central-difference tangents), at
     /// the given speed (1 without one).
     #[test]
     fn the_surface_impulse_pushes_the_nearest_free_point_along_the_normal() {
-        let (ku, kv) = (
-            KnotVector::clamped_uniform(3, 3).unwrap(),
-            KnotVector::clamped_uniform(3, 2).unwrap(),
-        );
+        // The domain [1, 3] × [−1, 1], so that the target (1.6, −0.3) is not at fractions of 1.
+        let ku =
+            KnotVector::try_new(vec![1., 1., 1., 1., 5. / 3., 7. / 3., 3., 3., 3., 3.], 3).unwrap();
+        let kv = KnotVector::try_new(vec![-1., -1., -1., -1., 0., 1., 1., 1., 1.], 3).unwrap();
         let (gu, gv) = (ku.greville(), kv.greville());
         let pts = gu
             .iter()
             .flat_map(|&u| {
-                gv.iter()
-                    .map(move |&v| [2.0 * u + 0.2 * v, 1.5 * v, 0.3 * u * u - 0.4 * v * u])
+                gv.iter().map(move |&v| {
+                    let (u, v) = ((u - 1.0) / 2.0, (v + 1.0) / 2.0);
+                    [2.0 * u + 0.2 * v, 1.5 * v, 0.3 * u * u - 0.4 * v * u]
+                })
             })
             .collect();
         let s = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 30]).unwrap();
         let setup = setup(Geometry::Surface(s.clone()));
         // The free points are the interior 4 × 3; by hand the nearest Greville point to
-        // (0.3, 0.35) among them.
+        // (1 + 0.3·2, −1 + 0.35·2) among them.
         let mut best = (usize::MAX, f64::INFINITY, (0.0, 0.0));
         for i in 1..5 {
             for j in 1..4 {
-                let d = (gu[i] - 0.3).powi(2) + (gv[j] - 0.35).powi(2);
+                let d = (gu[i] - 1.6).powi(2) + (gv[j] + 0.3).powi(2);
                 if d < best.1 {
                     best = (i * 5 + j, d, (gu[i], gv[j]));
                 }
@@ -509,7 +511,7 @@ mod tests {
         let pts: Vec<[f64; 3]> = g.iter().map(|&u| [3.0 * u, u * u, 0.8 * u]).collect();
         let n = pts.len();
         let c = NurbsCurve::try_new(k, pts, vec![1.0; n]).unwrap();
-        let setup = setup(Geometry::Curve(c.clone()));
+        let curve_setup = setup(Geometry::Curve(c.clone()));
         let (point, &u) = g[1..n - 1]
             .iter()
             .enumerate()
@@ -520,11 +522,29 @@ mod tests {
         let (a, b) = (c.point(u + h).unwrap(), c.point(u - h).unwrap());
         let t = unit([0, 1, 2].map(|x| a[x] - b[x]));
         let expected = unit([-t[2] * t[0], -t[2] * t[1], 1.0 - t[2] * t[2]]);
-        let velocities = point_velocities(&setup, &impulse(&setup, 2.0).unwrap());
+        let velocities = point_velocities(&curve_setup, &impulse(&curve_setup, 2.0).unwrap());
         for x in 0..3 {
             assert!((velocities[point][x] - 2.0 * expected[x]).abs() < 1e-8);
         }
         assert_eq!(velocities.iter().filter(|v| **v != [0.0; 3]).count(), 1);
+
+        // A curve in the y–z plane (tangent without x component): across it is still z made
+        // orthogonal to the tangent, in that plane.
+        let k = KnotVector::clamped_uniform(2, 4).unwrap();
+        let pts: Vec<[f64; 3]> = g.iter().map(|&u| [0.0, 3.0 * u, 0.5 * u * u]).collect();
+        let c = NurbsCurve::try_new(k, pts, vec![1.0; n]).unwrap();
+        let plane_setup = setup(Geometry::Curve(c.clone()));
+        let (a, b) = (c.point(u + h).unwrap(), c.point(u - h).unwrap());
+        let t = unit([0, 1, 2].map(|x| a[x] - b[x]));
+        let expected = unit([0.0, -t[2] * t[1], 1.0 - t[2] * t[2]]);
+        let velocities = point_velocities(&plane_setup, &impulse(&plane_setup, 1.0).unwrap());
+        for x in 0..3 {
+            assert!(
+                (velocities[point][x] - expected[x]).abs() < 1e-8,
+                "{:?}",
+                velocities[point]
+            );
+        }
     }
 
     #[test]

@@ -205,3 +205,49 @@ fn greville_net_maps_the_abscissae_onto_the_bounding_box() {
         assert_eq!(p[2], pts[k][2]);
     }
 }
+
+/// The "beyond" table's row of a derivation: its free masses, lowest frequencies and, for each
+/// horizon, the central probe's relative RMS over the samples up to it, recomputed from the
+/// two trajectories (RMS of the 3-D distance over the largest distance from the start).
+#[test]
+fn beyond_rows_recomputed_from_the_trajectories() {
+    let config = paper_config();
+    let (d, _) = derive_msm(&config, None, &mut |_, _| {}).unwrap();
+    let table = nurbspring_derive::beyond::beyond(&config, &d).unwrap();
+    assert_eq!(table.rows.len(), 2);
+    let row = &table.rows[0];
+    assert_eq!(row.free_mass, (d.mass.free_msm, d.mass.free_dnurbs));
+    assert_eq!(
+        row.omega1,
+        (Some(d.frequencies[0].msm), d.frequencies[0].dnurbs)
+    );
+    assert_eq!(row.lattice, "5 x 3 nodes, 3 free");
+    let (r, o) = (&d.dnurbs_trajectory, &d.msm_trajectory);
+    for (k, &(h, rel)) in row.relative_rms.iter().enumerate() {
+        assert_eq!(h, nurbspring_derive::beyond::HORIZONS[k]);
+        let n = r.t.iter().filter(|&&t| t <= h + 1e-9).count();
+        let dist = |s: usize, a: &[[f64; 3]], b: &[[f64; 3]]| {
+            (0..3)
+                .map(|x| (a[s][x] - b[s][x]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        let rms = ((0..n)
+            .map(|s| dist(s, &r.probes[0], &o.probes[0]).powi(2))
+            .sum::<f64>()
+            / n as f64)
+            .sqrt();
+        let start = [r.probes[0][0]];
+        let amplitude = (0..n)
+            .map(|s| dist(0, &start, &r.probes[0][s..]))
+            .fold(0.0, f64::max);
+        assert!(
+            (rel - rms / amplitude).abs() <= 1e-12 * rel,
+            "{h}: {rel} vs {}",
+            rms / amplitude
+        );
+    }
+    // The horizons cut the run at different lengths.
+    assert!(row.relative_rms[0].1 != row.relative_rms[1].1 || r.t.last().unwrap() <= &4.0);
+    assert_eq!(table.rows[1].derivation, nurbspring_derive::Method::Modal);
+}
