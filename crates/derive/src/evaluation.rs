@@ -426,6 +426,7 @@ mod tests {
     use nurbspring_geom::{KnotVector, NurbsCurve, NurbsSurface};
 
     use super::*;
+    use crate::scalar::EnergyOrigin;
     use crate::test_scenes::setup;
 
     fn unit(a: [f64; 3]) -> [f64; 3] {
@@ -545,6 +546,93 @@ mod tests {
                 velocities[point]
             );
         }
+    }
+
+    /// The second excitation's system keeps M and K and replaces the state: no load, the
+    /// given displacement and velocity, and the energy origin of no load.
+    #[test]
+    fn the_unloaded_system_keeps_the_matrices_and_replaces_the_state() {
+        use crate::scalar::ScalarSystem;
+        let sys = ScalarSystem {
+            free: vec![1, 2],
+            mass: SparseMatrix::from_diagonal(&[2.0, 3.0]),
+            stiffness: SparseMatrix::from_diagonal(&[5.0, 7.0]),
+            damping_ratio: 0.1,
+            load: vec![[0.0, 0.0, -1.0]; 2],
+            displacement: vec![[0.5; 3]; 2],
+            velocity: vec![[1.0; 3]; 2],
+            energy: EnergyOrigin::of_load(&[[0.0, 0.0, -1.0]; 2], &[[0.5; 3]; 2]),
+        };
+        let (u0, v0) = (
+            vec![[0.0, 0.1, 0.0], [0.2, 0.0, 0.0]],
+            vec![[0.0, 0.0, 3.0], [0.0; 3]],
+        );
+        let out = unloaded(&sys, u0.clone(), v0.clone());
+        assert_eq!(
+            (out.free.clone(), out.damping_ratio),
+            (sys.free.clone(), 0.1)
+        );
+        assert_eq!(out.mass.to_dense().data(), sys.mass.to_dense().data());
+        assert_eq!(
+            out.stiffness.to_dense().data(),
+            sys.stiffness.to_dense().data()
+        );
+        assert_eq!(out.load, vec![[0.0; 3]; 2]);
+        assert_eq!((out.displacement, out.velocity), (u0, v0));
+        assert_eq!((out.energy.elastic, out.energy.external), (0.0, 0.0));
+        assert_eq!(out.energy.force, vec![[0.0; 3]; 2]);
+    }
+
+    /// With weights as unknowns (4 dofs a point) the totals count the x, y, z rows only:
+    /// `Σ_ij M_ij / 3` over them is `μ` times the parameter measure (1) by the partition of
+    /// unity; the lattice's totals are its masses, all and free.
+    #[test]
+    fn mass_totals_skip_the_weight_rows() {
+        use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, Loads, Material};
+        let (ku, kv) = (
+            KnotVector::clamped_uniform(2, 2).unwrap(),
+            KnotVector::clamped_uniform(2, 2).unwrap(),
+        );
+        let (gu, gv) = (ku.greville(), kv.greville());
+        let pts = gu
+            .iter()
+            .flat_map(|&u| gv.iter().map(move |&v| [u, v, 0.1 * u * v]))
+            .collect();
+        let w = (0..16).map(|k| 1.0 + 0.1 * (k % 3) as f64).collect();
+        let s = NurbsSurface::try_new(ku, kv, pts, w).unwrap();
+        let model = DnurbsModel::new(
+            Geometry::Surface(s),
+            Material {
+                mu: 2.5,
+                alpha11: 1.0,
+                alpha22: 1.0,
+                ..Material::default()
+            },
+            Loads::default(),
+            &Constraints {
+                fixed_rings: 1,
+                ..Constraints::default()
+            },
+            DnurbsOptions {
+                weights_as_dofs: true,
+                ..DnurbsOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(model.matrices().dofs_per_point, 4);
+        let report = with_totals(
+            MassReport::default(),
+            &model,
+            &[1.0, 2.0, 3.0],
+            &[true, false, false],
+        );
+        assert!(
+            (report.total_dnurbs - 2.5).abs() < 1e-12,
+            "{}",
+            report.total_dnurbs
+        );
+        assert!(report.free_dnurbs > 0.0 && report.free_dnurbs < report.total_dnurbs);
+        assert_eq!((report.total_msm, report.free_msm), (6.0, 5.0));
     }
 
     #[test]
