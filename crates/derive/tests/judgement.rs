@@ -380,6 +380,29 @@ fn the_paper_derivation_reports_its_own_numbers() {
         );
         assert!(d.derived.constants.value(c) >= 0.0);
     }
+    // The selected mass at an end of the scan is a warning; a scan of one candidate is not
+    // a range.
+    let candidates = &d.mass.candidates;
+    let at_edge =
+        d.mass.selected == candidates[0].m || d.mass.selected == candidates.last().unwrap().m;
+    assert_eq!(
+        d.warnings
+            .iter()
+            .any(|w| w.contains("at the edge of the scan")),
+        at_edge
+    );
+    let mut one = config.clone();
+    one.fit.max_candidates = 1;
+    let (f, _) = derive_msm(&one, None, &mut |_, _| {}).unwrap();
+    assert_eq!(f.mass.candidates.len(), 1);
+    assert_eq!(f.mass.selected, f.mass.candidates[0].m);
+    assert!(
+        !f.warnings
+            .iter()
+            .any(|w| w.contains("at the edge of the scan")),
+        "{:?}",
+        f.warnings
+    );
     // The mass scan reports its progress once per candidate, in order.
     let mut calls = Vec::new();
     derive_msm(&config, None, &mut |k, n| calls.push((k, n))).unwrap();
