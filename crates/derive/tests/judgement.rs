@@ -485,6 +485,16 @@ fn the_excitation_derivation_reports_its_own_numbers() {
 fn the_modal_derivation_under_area_integration() {
     let mut config = config(Method::Modal);
     config.dnurbs.integration = Integration::Area;
+    // A skewed, strongly curved sheet: every component of c_u × c_v enters |c_u × c_v|.
+    let Geometry::Surface(s) = &config.geometry else {
+        unreachable!()
+    };
+    let pts = s
+        .control_points()
+        .iter()
+        .map(|p| [p[0] + 0.3 * p[1], p[1] + 0.2 * p[0], 4.0 * p[2]])
+        .collect();
+    config.geometry = Geometry::Surface(s.with_control_points(pts).unwrap());
     let (d, _setup) = derive_linear(&config, None).unwrap();
     check_fixed_node_masses(&d, &config);
     assert!(d.frequencies[0].relative_difference.abs() < 1e-8);
