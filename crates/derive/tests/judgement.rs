@@ -499,3 +499,57 @@ fn the_modal_derivation_under_area_integration() {
     check_fixed_node_masses(&d, &config);
     assert!(d.frequencies[0].relative_difference.abs() < 1e-8);
 }
+
+/// The exact reduction onto a Greville lattice (as many free nodes as free control points):
+/// its frequencies are the D-NURBS's, and its static response to gravity, `K_T⁻¹ f_T`, is the
+/// D-NURBS's steady state seen at the free nodes.
+#[test]
+fn the_exact_reduction_reproduces_the_dnurbs_at_the_nodes() {
+    let mut config = config(Method::Reduction);
+    config.lattice.grid = ParameterGrid::Greville;
+    config.loads.gravity = [0.0, 0.0, -1.0];
+    let (d, setup) = derive_linear(&config, None).unwrap();
+    let r = d.reduction.as_ref().expect("a reduction");
+    let n = r.free.len();
+    assert_eq!(n, 12);
+    let e = generalized_symmetric_eigen(&r.stiffness, &r.mass).unwrap();
+    let dnurbs = distinct_of_triples(setup.model().modes(3 * n).unwrap().omega);
+    for i in 0..n {
+        let w = e.values[i].sqrt();
+        assert!(close(w, dnurbs[i], 1e-8), "{i}: {w} vs {}", dnurbs[i]);
+    }
+    // Static: K_T u = f_T per component, against the D-NURBS's steady state at the nodes.
+    let p = setup.model().steady_state().unwrap();
+    let Geometry::Surface(s) = setup.model().geometry() else {
+        unreachable!()
+    };
+    let moved = s
+        .with_control_points(p.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
+        .unwrap();
+    for x in 0..3 {
+        let f: Vec<f64> = r.loads.iter().map(|l| l[x]).collect();
+        let u = nurbspring_linalg::solve_dense(&r.stiffness, &f).unwrap();
+        for (i, &a) in r.free.iter().enumerate() {
+            let (pu, pv) = r.params[a];
+            let expected = moved.point(pu, pv).unwrap()[x] - r.positions[a][x];
+            assert!(
+                (u[i] - expected).abs() < 1e-9,
+                "node {a}, {x}: {} vs {expected}",
+                u[i]
+            );
+        }
+    }
+}
+
+/// Under gravity alone the modal derivation's lattice sags like the D-NURBS: the nodes carry
+/// `m g` (the validation's relative RMS stays under the warning threshold).
+#[test]
+fn the_modal_derivation_carries_gravity() {
+    let mut config = config(Method::Modal);
+    config.loads.gravity = [0.0, 0.0, -1.0];
+    config.initial.velocities = Vec::new();
+    let (d, _) = derive_linear(&config, None).unwrap();
+    let v = &d.derived.validation;
+    assert!(v.dnurbs_amplitude > 0.0);
+    assert!(v.relative_rms < WARN_RELATIVE_RMS, "{}", v.relative_rms);
+}
