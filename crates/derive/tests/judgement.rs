@@ -210,6 +210,12 @@ fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
     assert!(mass.free_dnurbs < mass.total_dnurbs);
     if config.method.is_linear() {
         check_fixed_node_masses(d, config);
+        // The linear derivations report the mean free-node mass and how the masses came.
+        let count = (0..lattice.n_nodes())
+            .filter(|&a| !lattice.fixed[a])
+            .count();
+        assert!(close(mass.selected, free / count as f64, 1e-12));
+        assert!(!mass.rule.is_empty());
     }
 
     // The frequency table: the D-NURBS's from its own modes, the lattice's from its own K_T.
