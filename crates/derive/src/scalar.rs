@@ -207,7 +207,7 @@ mod tests {
             velocity: vec![[0.0; 3]; 2],
             energy: EnergyOrigin {
                 elastic: 0.5,
-                internal: vec![[1.0, 0.0, -1.0], [0.0, 2.0, 0.0]],
+                internal: vec![[1.0, 0.0, 1.0], [0.0, 2.0, 0.0]],
                 external: 0.25,
                 force: vec![[0.0, 0.0, -3.0], [1.0, 0.0, 0.0]],
             },
@@ -215,12 +215,12 @@ mod tests {
         let u = [[1.0, 0.0, 2.0], [-1.0, 0.5, 0.0]];
         let v = [[0.0, 1.0, 0.0], [2.0, 0.0, -1.0]];
         // Kinetic: x: 3·4 = 12; y: 2·1 = 2; z: 3·1 = 3 → ½·17.
-        // Elastic: rᵀu = 1 − 2 + 1 = 0; uᵀKu per component: x (1, −1): 2 + 2 + 2 = 6,
-        // y (0, 0.5): 0.5, z (2, 0): 8 → 0.5 + 0 + ½·14.5.
+        // Elastic: rᵀu = 1 + 2 + 1 = 4; uᵀKu per component: x (1, −1): 2 + 2 + 2 = 6,
+        // y (0, 0.5): 0.5, z (2, 0): 8 → 0.5 + 4 + ½·14.5.
         // External: 0.25 − (−6 − 1) = 7.25.
         let [kinetic, elastic, external] = sys.energies(&u, &v);
         assert_eq!(kinetic, 8.5);
-        assert_eq!(elastic, 0.5 + 7.25);
+        assert_eq!(elastic, 0.5 + 4.0 + 7.25);
         assert_eq!(external, 7.25);
         assert_eq!(dot(&u, &v), 0.0 + 0.0 + 0.0 - 2.0 + 0.0 + 0.0);
         // A load's origin: external potential fᵀu₀, no elastic part.

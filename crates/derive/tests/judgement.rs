@@ -177,6 +177,14 @@ fn check_fixed_node_masses(d: &Derivation, config: &Config) {
 
 fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
     assert_eq!(config.method.is_linear(), config.method != Method::Paper);
+    assert_eq!(
+        nurbspring_derive::FitMethod::ClosedForm.label(),
+        "closed form"
+    );
+    assert_eq!(
+        nurbspring_derive::FitMethod::TrustRegion.label(),
+        "trust region"
+    );
     // The probe is the lattice node nearest the asked parameter, reported at its own.
     let lattice = d.lattice.as_ref().unwrap();
     let params = lattice.params.as_ref().unwrap();
@@ -301,6 +309,28 @@ fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
         .fold(0.0, f64::max);
     assert!(close(v.dnurbs_amplitude, amplitude, 1e-12));
     assert!(close(v.relative_rms, v.rms / amplitude, 1e-12));
+    // The z component alone: RMS of the z difference over the largest |z − z(0)|.
+    let z_rms = ((0..n)
+        .map(|s| (r.probes[0][s][2] - o.probes[0][s][2]).powi(2))
+        .sum::<f64>()
+        / n as f64)
+        .sqrt();
+    let z_amplitude = r.probes[0]
+        .iter()
+        .map(|p| (p[2] - r.probes[0][0][2]).abs())
+        .fold(0.0, f64::max);
+    assert!(close(v.relative_rms_z, z_rms / z_amplitude, 1e-12));
+    // Both runs start at the probe node's rest position (the scenes start undisplaced).
+    let rest = lattice.positions[d.probe_nodes[0]];
+    for traj in [r, o] {
+        for x in 0..3 {
+            assert!(
+                (traj.probes[0][0][x] - rest[x]).abs() < 1e-12,
+                "{:?} vs {rest:?}",
+                traj.probes[0][0]
+            );
+        }
+    }
 
     // The warnings, each present exactly when its threshold is crossed, with its numbers.
     let has = |text: &str| d.warnings.iter().any(|w| w.contains(text));
@@ -394,6 +424,24 @@ fn the_paper_derivation_reports_its_own_numbers() {
         );
         assert!(d.derived.constants.value(c) >= 0.0);
     }
+    // The scan's eigenvalues of the free block of M: distinct values of M_ff = S_ff ⊗ I₃.
+    let free_dofs = setup.model().dof_map().free().to_vec();
+    let m_ff = setup
+        .model()
+        .matrices()
+        .mass
+        .submatrix(&free_dofs, &free_dofs)
+        .to_dense();
+    let identity = nurbspring_linalg::DenseMatrix::from_fn(m_ff.nrows(), m_ff.nrows(), |i, j| {
+        if i == j { 1.0 } else { 0.0 }
+    });
+    let e = generalized_symmetric_eigen(&m_ff, &identity).unwrap();
+    let expected = distinct_of_triples(e.values.clone());
+    assert_eq!(d.mass.eigenvalues_free_dofs.len(), expected.len());
+    for (a, b) in d.mass.eigenvalues_free_dofs.iter().zip(&expected) {
+        assert!(close(*a, *b, 1e-10), "{a} vs {b}");
+    }
+    assert!(d.mass.rule.contains("eigenvalue"), "{}", d.mass.rule);
     // The selected mass at an end of the scan is a warning; a scan of one candidate is not
     // a range.
     let candidates = &d.mass.candidates;

@@ -161,6 +161,13 @@ fn the_scaled_uniform_limit_schedules_like_the_model_of_each_mass() {
                 limit.dt_critical,
                 direct.dt_critical
             );
+            let rel = (limit.omega_max - direct.omega_max).abs() / direct.omega_max;
+            assert!(
+                rel < 1e-7,
+                "m = {m}: {} vs {}",
+                limit.omega_max,
+                direct.omega_max
+            );
         }
     }
     // Implicit schemes run as they are, without a limit.
