@@ -1211,3 +1211,123 @@ fn linear_implicit_steps_solve_the_damped_equation_of_motion() {
         a = a_new;
     }
 }
+
+// ------------------------------------------------------------------ damped explicit steps
+
+/// One damped step of each explicit scheme on the oscillator `m = 2`, `k = 8`, `d = 0.6`,
+/// against its update formula by hand (`a = (−k q − d v)/m`): symplectic Euler
+/// `v₁ = v₀ + Δt a(q₀, v₀)`, `q₁ = q₀ + Δt v₁`; velocity Verlet with the damping of the second
+/// half-kick taken at the new velocity, `v₁ = (m v½ − ½Δt k q₁)/(m + ½Δt d)`.
+#[test]
+fn explicit_schemes_take_one_damped_step_by_their_formulas() {
+    let (m, k, d) = (2.0, 8.0, 0.6);
+    let mut model = LinearModel::new(
+        SystemMatrix::Diagonal(vec![m]),
+        SparseMatrix::from_triplets(1, 1, &[(0, 0, k)]).unwrap(),
+    );
+    model.damping = Some(SystemMatrix::Diagonal(vec![d]));
+    let (q0, v0, dt) = (0.3, -0.7, 0.1);
+    let step = |kind| {
+        let mut s = State::new(vec![q0], vec![v0]);
+        let mut stepper = make_stepper(kind, &model, &s, dt).unwrap();
+        stepper.step(&model, &mut s, dt).unwrap();
+        (s.q[0], s.v[0], s.t)
+    };
+    let a = |q: f64, v: f64| (-k * q - d * v) / m;
+    let v1 = v0 + dt * a(q0, v0);
+    let (q, v, t) = step(IntegratorKind::SymplecticEuler);
+    assert!((v - v1).abs() < tol::EXACT && (q - (q0 + dt * v1)).abs() < tol::EXACT);
+    assert_eq!(t, dt);
+    let h = 0.5 * dt;
+    let v_half = v0 + h * a(q0, v0);
+    let q1 = q0 + dt * v_half;
+    let v1 = (m * v_half - h * k * q1) / (m + h * d);
+    let (q, v, t) = step(IntegratorKind::VelocityVerlet);
+    assert!(
+        (q - q1).abs() < tol::EXACT && (v - v1).abs() < tol::EXACT,
+        "{q} {v}"
+    );
+    assert_eq!(t, dt);
+    // RK4 on y' = A y, A = [[0, 1], [−k/m, −d/m]]: the Taylor polynomial of exp(AΔt) to order 4.
+    let apply = |y: [f64; 2]| [y[1], -k / m * y[0] - d / m * y[1]];
+    let mut term = [q0, v0];
+    let mut y = term;
+    for p in 1..=4 {
+        term = apply(term).map(|x| x * dt / p as f64);
+        y = [y[0] + term[0], y[1] + term[1]];
+    }
+    let (q, v, _) = step(IntegratorKind::Rk4);
+    assert!((q - y[0]).abs() < tol::EXACT && (v - y[1]).abs() < tol::EXACT);
+}
+
+/// A stepper is built for one Δt: another is refused.
+#[test]
+fn a_stepper_refuses_another_time_step() {
+    let model = Chain {
+        n: 3,
+        k: 1.0,
+        m: 1.0,
+    }
+    .model();
+    let s = State::new(vec![0.1; 3], vec![0.0; 3]);
+    for kind in [
+        IntegratorKind::BackwardEuler,
+        IntegratorKind::Newmark,
+        IntegratorKind::Modal,
+    ] {
+        let mut stepper = make_stepper(kind, &model, &s, 0.1).unwrap();
+        let mut state = s.clone();
+        assert!(
+            stepper
+                .step(&model, &mut state, 0.1 * (1.0 + 1e-14))
+                .is_ok(),
+            "{kind}"
+        );
+        assert!(
+            matches!(
+                stepper.step(&model, &mut state, 0.2),
+                Err(SimError::NotSupported { .. })
+            ),
+            "{kind}"
+        );
+    }
+}
+
+#[test]
+fn representable_numbers_and_time_limits() {
+    for x in [0.0, -1.0, 1e-300, MAX_MAGNITUDE, -MAX_MAGNITUDE] {
+        assert!(representable(x), "{x}");
+    }
+    for x in [f64::NAN, f64::INFINITY, 1.0001 * MAX_MAGNITUDE, -1e31] {
+        assert!(!representable(x), "{x}");
+    }
+    // ⌈(t_end − t0)/Δt⌉ steps at most MAX_STEPS.
+    assert!(check_time(1e-3, 1e5, 0.0).is_ok());
+    assert!(matches!(
+        check_time(1e-4, 1e5, 0.0),
+        Err(SimError::TooManySteps { steps, .. }) if steps == 1e9
+    ));
+    assert!(check_time(1e-4, 1e4 + 5.0, 5.0).is_ok());
+}
+
+/// A run given its stability limit reports that limit, not one of its own.
+#[test]
+fn a_scheduled_run_reports_the_limit_it_was_given() {
+    let c = Chain {
+        n: 4,
+        k: 1.0,
+        m: 1.0,
+    };
+    let model = c.model();
+    let given = StabilityLimit {
+        omega_max: 3.0,
+        dt_critical: 2.0 / 3.0,
+    };
+    let (schedule, limit) = Schedule::below(IntegratorKind::SymplecticEuler, 0.1, given);
+    assert_eq!(limit, Some(given));
+    let opts = RunOptions::scheduled(0.1, 1.0, schedule, limit);
+    let s = State::new(initial_positions(c.n), vec![0.0; c.n]);
+    let summary = simulate(&model, s, &opts, &mut NullObserver).unwrap();
+    assert_eq!(summary.omega_max, Some(3.0));
+    assert_eq!(summary.dt_critical, Some(2.0 / 3.0));
+}

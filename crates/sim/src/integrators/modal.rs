@@ -169,3 +169,24 @@ impl super::Stepper for Modal {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{sinc, sinhc};
+
+    /// The series below 10⁻⁴ and the quotients above agree with `sin x / x`, `sinh x / x` to
+    /// round-off (the series' first neglected term is x⁶/5040 < 10⁻²⁷), and both are 1 at 0.
+    #[test]
+    fn sinc_and_sinhc_by_their_definitions() {
+        assert_eq!((sinc(0.0), sinhc(0.0)), (1.0, 1.0));
+        for x in [1e-8f64, 3e-5, 9.9e-5, 1e-4, 2e-4, 0.5, 3.0] {
+            let (s, sh) = (x.sin() / x, x.sinh() / x);
+            assert!((sinc(x) - s).abs() <= 2.0 * f64::EPSILON, "sinc({x})");
+            assert!(
+                (sinhc(x) - sh).abs() <= 4.0 * f64::EPSILON * sh,
+                "sinhc({x})"
+            );
+            assert_eq!((sinc(-x), sinhc(-x)), (sinc(x), sinhc(x)));
+        }
+    }
+}
