@@ -1331,3 +1331,86 @@ fn a_scheduled_run_reports_the_limit_it_was_given() {
     assert_eq!(summary.omega_max, Some(3.0));
     assert_eq!(summary.dt_critical, Some(2.0 / 3.0));
 }
+
+/// Symplectic Euler's other two paths, from t = 0.25: a damping matrix that is not diagonal
+/// (forces first, then the update) against the formula, and a model with its own fused step,
+/// which the stepper calls and then advances the clock.
+#[test]
+fn symplectic_euler_with_full_damping_and_with_a_fused_step() {
+    let mut model = LinearModel::new(
+        SystemMatrix::Diagonal(vec![2.0, 1.0]),
+        SparseMatrix::from_triplets(
+            2,
+            2,
+            &[(0, 0, 8.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 3.0)],
+        )
+        .unwrap(),
+    );
+    model.damping = Some(SystemMatrix::Sparse(
+        SparseMatrix::from_triplets(2, 2, &[(0, 0, 0.6), (0, 1, 0.1), (1, 0, 0.1), (1, 1, 0.4)])
+            .unwrap(),
+    ));
+    let (q0, v0, dt) = ([0.3, -0.2], [-0.7, 0.5], 0.1);
+    let mut s = State::new(q0.to_vec(), v0.to_vec());
+    s.t = 0.25;
+    let mut stepper = make_stepper(IntegratorKind::SymplecticEuler, &model, &s, dt).unwrap();
+    stepper.step(&model, &mut s, dt).unwrap();
+    let a = [
+        (-(8.0 * q0[0] - q0[1]) - (0.6 * v0[0] + 0.1 * v0[1])) / 2.0,
+        -(-q0[0] + 3.0 * q0[1]) - (0.1 * v0[0] + 0.4 * v0[1]),
+    ];
+    for i in 0..2 {
+        let v1 = v0[i] + dt * a[i];
+        assert!(
+            (s.v[i] - v1).abs() < tol::EXACT && (s.q[i] - (q0[i] + dt * v1)).abs() < tol::EXACT
+        );
+    }
+    assert!((s.t - 0.35).abs() < 4.0 * f64::EPSILON);
+
+    /// A model whose fused step moves every coordinate by Δt and every velocity by 1.
+    struct Fused(LinearModel);
+    impl FusedStep for Fused {
+        fn workspace_len(&self) -> usize {
+            3
+        }
+        fn symplectic_euler(&self, _t: f64, dt: f64, q: &mut [f64], v: &mut [f64], w: &mut [f64]) {
+            assert!(w.len() >= 3);
+            q.iter_mut().for_each(|x| *x += dt);
+            v.iter_mut().for_each(|x| *x += 1.0);
+        }
+    }
+    impl DynamicModel for Fused {
+        fn n_dofs(&self) -> usize {
+            self.0.n_dofs()
+        }
+        fn mass(&self) -> &SystemMatrix {
+            self.0.mass()
+        }
+        fn damping(&self) -> Option<&SystemMatrix> {
+            None
+        }
+        fn internal_force(&self, q: &[f64], out: &mut [f64]) {
+            self.0.internal_force(q, out)
+        }
+        fn external_force(&self, t: f64, out: &mut [f64]) {
+            self.0.external_force(t, out)
+        }
+        fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+            self.0.tangent_stiffness(q)
+        }
+        fn potential_energy(&self, q: &[f64]) -> f64 {
+            self.0.potential_energy(q)
+        }
+        fn fused_step(&self) -> Option<&dyn FusedStep> {
+            Some(self)
+        }
+    }
+    let fused = Fused(model.clone());
+    let mut s = State::new(q0.to_vec(), v0.to_vec());
+    s.t = 0.25;
+    let mut stepper = make_stepper(IntegratorKind::SymplecticEuler, &fused, &s, dt).unwrap();
+    stepper.step(&fused, &mut s, dt).unwrap();
+    assert_eq!(s.q, vec![q0[0] + dt, q0[1] + dt]);
+    assert_eq!(s.v, vec![v0[0] + 1.0, v0[1] + 1.0]);
+    assert!((s.t - 0.35).abs() < 4.0 * f64::EPSILON);
+}
