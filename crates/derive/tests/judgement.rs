@@ -615,3 +615,22 @@ fn the_modal_derivation_carries_gravity() {
     assert!(v.dnurbs_amplitude > 0.0);
     assert!(v.relative_rms < WARN_RELATIVE_RMS, "{}", v.relative_rms);
 }
+
+/// The reduction is exact when the free nodes are as many as the free control points (the
+/// Greville lattice), the Guyan (static) one on fewer nodes, and refused on more.
+#[test]
+fn reductions_are_exact_guyan_or_refused_by_the_count_of_free_nodes() {
+    let mut fewer = config(Method::Reduction);
+    fewer.lattice.grid = ParameterGrid::Uniform {
+        nodes_u: 4,
+        nodes_v: 4,
+    };
+    let (d, _) = derive_linear(&fewer, None).unwrap();
+    let r = d.reduction.as_ref().unwrap();
+    assert!(r.free.len() < 12 && r.guyan, "{} free nodes", r.free.len());
+    let mut greville = config(Method::Reduction);
+    greville.lattice.grid = ParameterGrid::Greville;
+    let (d, _) = derive_linear(&greville, None).unwrap();
+    assert!(!d.reduction.as_ref().unwrap().guyan);
+    assert!(derive_linear(&config(Method::Reduction), None).is_err());
+}

@@ -88,3 +88,33 @@ fn mac_of_modes() {
     assert!((mac(&[1.0, 2.0, 3.0], &[-2.0, -4.0, -6.0]) - 1.0).abs() < 1e-15);
     assert_eq!(mac(&[1.0, -1.0], &[1.0, 1.0]), 0.0);
 }
+
+/// The closed-form response of a rigid mode (λ = 0) is the free motion `u₀ + v₀ t + ½ f t²`
+/// (unit mass), beside an oscillator of λ = 4 whose response is `u₀ cos 2t + v₀/2 sin 2t`.
+#[test]
+fn modal_response_of_a_rigid_mode_and_an_oscillator() {
+    let k = SparseMatrix::from_diagonal(&[0.0, 4.0]);
+    let m = SparseMatrix::identity(2);
+    let basis = nurbspring_derive::ModalBasis::new(&k, &m).unwrap();
+    let times = [0.0, 0.5, 1.25];
+    let u0 = [[0.1, 0.0, -0.2], [0.3, 0.0, 0.0]];
+    let v0 = [[1.0, 0.5, 0.0], [0.0, -0.4, 0.0]];
+    let f = [[0.0, 0.0, -2.0], [0.0; 3]];
+    let watch = vec![vec![(0, 1.0)], vec![(1, 1.0)]];
+    let (points, _) = basis.response(&watch, &times, &u0, &v0, &f, None);
+    for (s, &t) in times.iter().enumerate() {
+        for x in 0..3 {
+            let rigid = u0[0][x] + v0[0][x] * t + 0.5 * f[0][x] * t * t;
+            let oscillator = u0[1][x] * (2.0 * t).cos() + v0[1][x] / 2.0 * (2.0 * t).sin();
+            assert!(
+                (points[0][s][x] - rigid).abs() < 1e-14,
+                "rigid at {t}: {:?}",
+                points[0][s]
+            );
+            assert!(
+                (points[1][s][x] - oscillator).abs() < 1e-14,
+                "oscillator at {t}"
+            );
+        }
+    }
+}

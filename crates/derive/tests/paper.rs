@@ -117,7 +117,23 @@ fn greville_net_is_linear_parametrization() {
 
 #[test]
 fn reproduction_reports_every_reading() {
-    let (_, report) = reproduce(&paper_config(), &mut |_, _| {}).unwrap();
+    let (main, report) = reproduce(&paper_config(), &mut |_, _| {}).unwrap();
+    // The eigenvalue of M nearest the paper's mass 0.005, by rank, in each listing.
+    for (nearest, list) in report
+        .mass_nearest
+        .iter()
+        .zip([&main.mass.eigenvalues, &main.mass.eigenvalues_free_dofs])
+    {
+        let (rank, value) = list
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1 - 0.005).abs().total_cmp(&(b.1 - 0.005).abs()))
+            .unwrap();
+        assert_eq!(
+            (nearest.rank, nearest.value, nearest.count),
+            (rank + 1, *value, list.len())
+        );
+    }
     assert_eq!(report.fits.len(), 12);
     assert_eq!(report.dynamics.len(), 20);
     assert!(report.verdicts.len() >= 6);
