@@ -118,6 +118,37 @@ fn greville_net_is_linear_parametrization() {
 #[test]
 fn reproduction_reports_every_reading() {
     let (main, report) = reproduce(&paper_config(), &mut |_, _| {}).unwrap();
+    // The verdicts of the two constants: graded on the closest of all readings.
+    use nurbspring_derive::paper::{PARTLY, REPRODUCED, Verdict};
+    use nurbspring_msm::{Class, SpringKind};
+    for (symbol, class, paper) in [
+        ("k_edge", Class::Spring(SpringKind::Structural), 2.7225),
+        ("k_diag", Class::Spring(SpringKind::Shear), 0.8661),
+    ] {
+        let line = report
+            .verdicts
+            .iter()
+            .find(|v| v.quantity == symbol)
+            .unwrap();
+        let closest = report
+            .fits
+            .iter()
+            .map(|r| (r.result.constants.value(class) - paper).abs() / paper)
+            .fold(f64::INFINITY, f64::min);
+        let grade = if closest <= REPRODUCED {
+            Verdict::Reproduced
+        } else if closest <= PARTLY {
+            Verdict::Partly
+        } else {
+            Verdict::NotReproduced
+        };
+        assert_eq!(line.verdict, grade, "{symbol}: closest {closest}");
+        assert!(
+            line.why.contains(&format!("({:.2}% off)", 100.0 * closest)),
+            "{}",
+            line.why
+        );
+    }
     // The eigenvalue of M nearest the paper's mass 0.005, by rank, in each listing.
     for (nearest, list) in report
         .mass_nearest
