@@ -150,18 +150,22 @@ pub fn dominant_period(t: &[f64], z: &[f64]) -> Option<f64> {
 mod tests {
     use super::*;
 
-    /// A sine of period 1.7 s around a large mean (5, amplitude 10⁻³), sampled every 0.05 s
-    /// for 20 periods: the upward crossings, interpolated linearly, are spaced by the period
-    /// to within the interpolation error, O((ω Δt)³) of a sample at a crossing.
+    /// A sine of period 1.7 s around a mean of 5 (amplitude 1), sampled every 0.05 s for 20
+    /// periods: the upward crossings, interpolated linearly, are spaced by the period to
+    /// within the interpolation error, O((ω Δt)³) of a sample at a crossing; a sine of
+    /// amplitude 10⁻³ around the same mean is still a signal.
     #[test]
     fn dominant_period_of_a_small_sine_on_a_large_mean() {
         let period = 1.7;
         let t: Vec<f64> = (0..=680).map(|i| i as f64 * 0.05).collect();
         let z: Vec<f64> = t
             .iter()
-            .map(|t| 5.0 + 1e-3 * (2.0 * std::f64::consts::PI * t / period + 0.3).sin())
+            .map(|t| 5.0 + (2.0 * std::f64::consts::PI * t / period + 0.3).sin())
             .collect();
         let p = dominant_period(&t, &z).unwrap();
+        assert!((p - period).abs() < 1e-5, "{p}");
+        let small: Vec<f64> = z.iter().map(|x| 5.0 + 1e-3 * (x - 5.0)).collect();
+        let p = dominant_period(&t, &small).unwrap();
         assert!((p - period).abs() < 1e-5, "{p}");
         // A constant has none, nor does a series with a NaN.
         assert_eq!(dominant_period(&t, &vec![5.0; t.len()]), None);
