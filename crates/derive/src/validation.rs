@@ -150,13 +150,13 @@ pub fn dominant_period(t: &[f64], z: &[f64]) -> Option<f64> {
 mod tests {
     use super::*;
 
-    /// A sine of period 1.7 s around a mean of 5 (amplitude 1), sampled every 0.05 s for 20
-    /// periods: the upward crossings, interpolated linearly, are spaced by the period to
+    /// A sine of period √3 s around a mean of 5 (amplitude 1), sampled every 0.05 s (so each
+    /// crossing falls elsewhere between samples) for about 20 periods: the upward crossings, interpolated linearly, are spaced by the period to
     /// within the interpolation error, O((ω Δt)³) of a sample at a crossing; a sine of
     /// amplitude 10⁻³ around the same mean is still a signal.
     #[test]
     fn dominant_period_of_a_small_sine_on_a_large_mean() {
-        let period = 1.7;
+        let period = 3f64.sqrt();
         let t: Vec<f64> = (0..=680).map(|i| i as f64 * 0.05).collect();
         let z: Vec<f64> = t
             .iter()
