@@ -1330,6 +1330,12 @@ fn a_scheduled_run_reports_the_limit_it_was_given() {
     let summary = simulate(&model, s, &opts, &mut NullObserver).unwrap();
     assert_eq!(summary.omega_max, Some(3.0));
     assert_eq!(summary.dt_critical, Some(2.0 / 3.0));
+    // A step above 0.9 of the limit is cut into substeps, which the options carry: Δt = 1
+    // against 0.9 · 2/3 = 0.6 takes 2.
+    let (schedule, limit) = Schedule::below(IntegratorKind::SymplecticEuler, 1.0, given);
+    assert_eq!(schedule.substeps, 2);
+    let opts = RunOptions::scheduled(1.0, 4.0, schedule, limit);
+    assert_eq!((opts.substeps, opts.substep()), (2, 0.5));
 }
 
 /// Symplectic Euler's other two paths, from t = 0.25: a damping matrix that is not diagonal
