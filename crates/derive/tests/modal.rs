@@ -118,3 +118,43 @@ fn modal_response_of_a_rigid_mode_and_an_oscillator() {
         }
     }
 }
+
+/// Ω of points on a rational patch with weights as unknowns: the positions of a moved shape are
+/// the points of that shape (control points and weights from `p`), evaluated directly.
+#[test]
+fn omega_positions_of_a_moved_rational_shape() {
+    use nurbspring_dnurbs::Geometry;
+    use nurbspring_geom::KnotVector;
+    let k = KnotVector::clamped_uniform(2, 1).unwrap();
+    let pts: Vec<[f64; 3]> = (0..9)
+        .map(|i| [(i / 3) as f64, (i % 3) as f64, 0.1 * i as f64])
+        .collect();
+    let w: Vec<f64> = (0..9).map(|i| 1.0 + 0.2 * (i % 2) as f64).collect();
+    let s = NurbsSurface::try_new(k.clone(), k, pts.clone(), w.clone()).unwrap();
+    let params = [(0.2, 0.7), (0.5, 0.5), (0.9, 0.1)];
+    let omega =
+        nurbspring_derive::Omega::new(&Geometry::Surface(s.clone()), &params, true).unwrap();
+    assert_eq!(omega.params(), &params);
+    // p: 4 per point (x, y, z, w), moved.
+    let mut p = Vec::new();
+    let (mut moved, mut moved_w) = (Vec::new(), Vec::new());
+    for i in 0..9 {
+        let x = [pts[i][0] + 0.05 * i as f64, pts[i][1], pts[i][2] - 0.1];
+        let wi = w[i] * (1.0 + 0.1 * (i % 3) as f64);
+        p.extend_from_slice(&[x[0], x[1], x[2], wi]);
+        moved.push(x);
+        moved_w.push(wi);
+    }
+    let shape = s.with_control_points_and_weights(moved, moved_w).unwrap();
+    let got = omega.positions(&p).unwrap();
+    for (a, &(u, v)) in params.iter().enumerate() {
+        let x = shape.point(u, v).unwrap();
+        for c in 0..3 {
+            assert!(
+                (got[a][c] - x[c]).abs() < 1e-14,
+                "point {a}: {:?} vs {x:?}",
+                got[a]
+            );
+        }
+    }
+}
