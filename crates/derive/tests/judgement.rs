@@ -634,3 +634,51 @@ fn reductions_are_exact_guyan_or_refused_by_the_count_of_free_nodes() {
     assert!(!d.reduction.as_ref().unwrap().guyan);
     assert!(derive_linear(&config(Method::Reduction), None).is_err());
 }
+
+/// A chain on a curve under area (arc-length) integration: its fixed end nodes carry
+/// `μ τ_u |c′(u)|` (half-cells at the ends; |c′| by central differences).
+#[test]
+fn a_chain_under_arc_length_integration_has_its_dual_cell_masses() {
+    use nurbspring_geom::NurbsCurve;
+    let k = KnotVector::clamped_uniform(3, 4).unwrap();
+    let g = k.greville();
+    let pts: Vec<[f64; 3]> = g
+        .iter()
+        .map(|&u| [3.0 * u, 0.8 * u * u, 0.5 * (2.0 * u).sin()])
+        .collect();
+    let n = pts.len();
+    let curve = NurbsCurve::try_new(k, pts, vec![1.0; n]).unwrap();
+    let mut config = config(Method::Modal);
+    config.geometry = Geometry::Curve(curve.clone());
+    config.material = Material {
+        mu: 2.0,
+        alpha11: 1.0,
+        beta11: 0.01,
+        ..Material::default()
+    };
+    config.lattice.grid = ParameterGrid::Uniform {
+        nodes_u: 9,
+        nodes_v: 1,
+    };
+    config.lattice.constants = Constants::from_pairs(
+        Class::linear(&LinearKind::CHAIN)
+            .into_iter()
+            .map(|c| (c, 1.0)),
+    );
+    config.dnurbs.integration = Integration::Area;
+    let (d, _) = derive_linear(&config, None).unwrap();
+    let lattice = d.lattice.as_ref().unwrap();
+    let h = 1e-6;
+    for (a, u, tau) in [(0, 0.0f64, 0.0625), (8, 1.0, 0.0625)] {
+        assert!(lattice.fixed[a]);
+        let (u0, u1) = ((u - h).max(0.0), (u + h).min(1.0));
+        let (p, q) = (curve.point(u1).unwrap(), curve.point(u0).unwrap());
+        let speed = (0..3).map(|x| (p[x] - q[x]).powi(2)).sum::<f64>().sqrt() / (u1 - u0);
+        let expected = 2.0 * tau * speed;
+        assert!(
+            close(lattice.masses[a], expected, 1e-5),
+            "node {a}: {} vs {expected}",
+            lattice.masses[a]
+        );
+    }
+}
