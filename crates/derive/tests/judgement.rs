@@ -530,6 +530,70 @@ fn the_excitation_derivation_reports_its_own_numbers() {
             a2 / total
         );
     }
+    // The reported final residual is the objective at the final constants, recomputed here
+    // (docs/math.md §8.4): for each weighted mode (ω, its shape at the free nodes Ω_ff φ, its
+    // share) the MSM mode of best MAC among the lowest 2·8 of `L x = ω² m x` before the
+    // calibration (masses / mass_scale), the weighted log ratio of the frequencies and the
+    // difference of the normalized shapes.
+    let lattice = d.lattice.as_ref().unwrap();
+    let free_nodes: Vec<usize> = (0..lattice.n_nodes())
+        .filter(|&a| !lattice.fixed[a])
+        .collect();
+    let params: Vec<(f64, f64)> = free_nodes
+        .iter()
+        .map(|&a| lattice.params.as_ref().unwrap()[a])
+        .collect();
+    let omega = nurbspring_derive::Omega::new(&config.geometry, &params, false).unwrap();
+    let cps: Vec<usize> = sys.free.iter().map(|&k| 3 * k).collect();
+    let rows: Vec<usize> = (0..params.len()).map(|a| 3 * a).collect();
+    let omega_ff = omega.matrix().submatrix(&rows, &cps).to_dense();
+    let model = MsmModel::new(lattice.clone()).unwrap();
+    let k_full = model
+        .tangent_stiffness(model.initial_positions())
+        .to_dense();
+    let nf = free_nodes.len();
+    let l = nurbspring_linalg::DenseMatrix::from_fn(nf, nf, |a, b| k_full[(3 * a, 3 * b)]);
+    let masses: Vec<f64> = free_nodes
+        .iter()
+        .map(|&a| lattice.masses[a] / report.mass_scale)
+        .collect();
+    let m = nurbspring_linalg::DenseMatrix::from_fn(
+        nf,
+        nf,
+        |a, b| if a == b { masses[a] } else { 0.0 },
+    );
+    let e = generalized_symmetric_eigen(&l, &m).unwrap();
+    let count = 16.min(nf);
+    let mac = nurbspring_derive::mac;
+    let norm = |x: &[f64]| dot(x, x).sqrt();
+    let mut residual = Vec::new();
+    for &(mode, share) in &report.modes {
+        let phi = basis.mode(mode - 1);
+        let shape: Vec<f64> = (0..omega_ff.nrows())
+            .map(|a| (0..phi.len()).map(|k| omega_ff[(a, k)] * phi[k]).sum())
+            .collect();
+        let best = (0..count)
+            .max_by(|&i, &j| {
+                mac(&shape, &e.vectors.column(i)).total_cmp(&mac(&shape, &e.vectors.column(j)))
+            })
+            .unwrap();
+        let psi = e.vectors.column(best);
+        let weight = share.sqrt();
+        let w = e.values[best].max(0.0).sqrt();
+        residual.push(weight * (w.max(f64::MIN_POSITIVE) / basis.omega[mode - 1]).ln());
+        let sign = if dot(&shape, &psi) < 0.0 { -1.0 } else { 1.0 };
+        let (na, nb) = (norm(&shape), norm(&psi));
+        for (a, b) in shape.iter().zip(&psi) {
+            residual.push(weight * (a / na - sign * b / nb));
+        }
+    }
+    let recomputed = norm(&residual);
+    assert!(
+        close(report.residual.1, recomputed, 1e-6),
+        "reported {} vs recomputed {recomputed}",
+        report.residual.1
+    );
+
     // No constant left the range and the step did not shrink: no over-fitting warning.
     let overfit = d.warnings.iter().any(|w| w.contains("the excitation fit"));
     let shrunk = report.dt_critical.1 < report.dt_critical.0 / 10.0;
