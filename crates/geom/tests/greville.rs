@@ -51,3 +51,20 @@ fn greville_abscissae_reproduce_the_parameter() {
         }
     }
 }
+
+/// A decreasing knot vector is refused naming both knots; derivative slots have their order.
+#[test]
+fn decreasing_knots_are_named_and_slots_have_orders() {
+    match nurbspring_geom::KnotVector::try_new(vec![0.0, 0.0, 0.5, 0.25, 1.0, 1.0], 1) {
+        Err(nurbspring_geom::GeomError::DecreasingKnots {
+            index,
+            value,
+            prev_index,
+            prev,
+        }) => assert_eq!((index, value, prev_index, prev), (3, 0.25, 2, 0.5)),
+        other => panic!("expected DecreasingKnots, got {other:?}"),
+    }
+    use nurbspring_geom::Deriv;
+    let orders: Vec<usize> = Deriv::ALL.iter().map(|d| d.order()).collect();
+    assert_eq!(orders, vec![0, 1, 1, 2, 2, 2]);
+}

@@ -296,6 +296,10 @@ proptest! {
                 let rhs: f64 = jt.iter().zip(&p).map(|(a, b)| a * b).sum();
                 let scale = 1.0 + jt.iter().zip(&p).map(|(a, b)| (a * b).abs()).sum::<f64>();
                 prop_assert!((lhs - rhs).abs() <= ROUNDOFF * scale, "adjoint: {lhs} vs {rhs}");
+                // And Jᵀ f column by column against the dense J (the weight column too, which
+                // the adjoint identity does not see: Σ_k w_k ∂c/∂w_k = 0).
+                let dense_t: Vec<f64> = (0..n).map(|c| (0..3).map(|x| dense[x * n + c] * f[x]).sum()).collect();
+                check_close(&jt, &dense_t, ROUNDOFF, "Jᵀ f")?;
             }
         }
     }
