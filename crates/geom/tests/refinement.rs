@@ -402,3 +402,46 @@ fn surface_insertion_errors_and_single_direction() {
         assert_close3(sv.point(u, v).unwrap(), p, ROUNDOFF, "v insertion");
     }
 }
+
+/// Degree elevation of a cubic with simple interior knots (A5.9's knot-removal steps run at
+/// every interior knot) by 1 and 2: the same curve at 201 parameters, to round-off.
+#[test]
+fn elevating_a_cubic_with_simple_knots_keeps_it() {
+    let k = KnotVector::try_new(vec![0., 0., 0., 0., 0.2, 0.45, 0.7, 1., 1., 1., 1.], 3).unwrap();
+    let pts: Vec<[f64; 3]> = (0..7)
+        .map(|i| [i as f64, ((i * 5) % 7) as f64 * 0.3, (i as f64 * 0.9).sin()])
+        .collect();
+    let w = vec![1.0, 0.8, 1.3, 1.0, 0.7, 1.1, 1.0];
+    let c = nurbspring_geom::NurbsCurve::try_new(k, pts, w).unwrap();
+    for t in [1, 2] {
+        let (up, _) = c.elevate_degree(t).unwrap();
+        assert_eq!(up.basis().degree(), 3 + t);
+        for s in 0..=200 {
+            let u = s as f64 / 200.0;
+            let (a, b) = (c.point(u).unwrap(), up.point(u).unwrap());
+            for x in 0..3 {
+                assert!(
+                    (a[x] - b[x]).abs() < 1e-12,
+                    "t = {t}, u = {u}: {a:?} vs {b:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn surface_control_points_are_indexed_row_by_row() {
+    let k = KnotVector::try_new(vec![0., 0., 0.5, 1., 1.], 1).unwrap();
+    let kv = KnotVector::try_new(vec![0., 0., 0.3, 0.6, 1., 1.], 1).unwrap();
+    let pts: Vec<[f64; 3]> = (0..12)
+        .map(|k| [(k / 4) as f64, (k % 4) as f64, 0.0])
+        .collect();
+    let s = nurbspring_geom::NurbsSurface::try_new(k, kv, pts.clone(), vec![1.0; 12]).unwrap();
+    assert_eq!((s.n_u(), s.n_v()), (3, 4));
+    for i in 0..3 {
+        for j in 0..4 {
+            assert_eq!(s.index(i, j), 4 * i + j);
+            assert_eq!(s.control_points()[s.index(i, j)], [i as f64, j as f64, 0.0]);
+        }
+    }
+}
