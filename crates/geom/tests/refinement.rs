@@ -445,3 +445,38 @@ fn surface_control_points_are_indexed_row_by_row() {
         }
     }
 }
+
+/// `uniform_grid` on a bilinear patch over `[1, 3] × [0, 2]`: parameters evenly spaced with
+/// both ends, points of the plane `z = x + 2y` there, and its unit normal `(−1, −2, 1)/√6`.
+#[test]
+fn uniform_grid_and_normal_of_a_plane_by_hand() {
+    use nurbspring_geom::{NurbsSurface, linspace};
+    let ku = KnotVector::try_new(vec![1., 1., 3., 3.], 1).unwrap();
+    let kv = KnotVector::try_new(vec![0., 0., 2., 2.], 1).unwrap();
+    let plane = |x: f64, y: f64| [x, y, x + 2.0 * y];
+    let pts = vec![
+        plane(0.0, 0.0),
+        plane(0.0, 1.0),
+        plane(2.0, 0.0),
+        plane(2.0, 1.0),
+    ];
+    let s = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 4]).unwrap();
+    let (us, vs, grid) = s.uniform_grid(3, 5).unwrap();
+    assert_eq!(us, vec![1.0, 2.0, 3.0]);
+    assert_eq!(vs, vec![0.0, 0.5, 1.0, 1.5, 2.0]);
+    assert_eq!(linspace(0.0, 1.0, 1), vec![0.0]);
+    assert_eq!(grid.len(), 15);
+    for (i, &u) in us.iter().enumerate() {
+        for (j, &v) in vs.iter().enumerate() {
+            let expected = plane(u - 1.0, 0.5 * v);
+            for x in 0..3 {
+                assert!((grid[i * 5 + j][x] - expected[x]).abs() < 1e-14);
+            }
+        }
+    }
+    let n = s.normal(1.7, 0.4).unwrap();
+    let e = [-1.0 / 6f64.sqrt(), -2.0 / 6f64.sqrt(), 1.0 / 6f64.sqrt()];
+    for x in 0..3 {
+        assert!((n[x] - e[x]).abs() < 1e-15, "{n:?}");
+    }
+}
