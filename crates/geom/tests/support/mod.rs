@@ -280,7 +280,7 @@ pub fn norm(a: [f64; 3]) -> f64 {
 
 // ---- proptest strategies --------------------------------------------------------------------
 
-/// Proptest configuration: 96 cases per property (the suite stays well under a second), or
+/// Proptest configuration: 256 cases per property (about a second for the whole suite), or
 /// `PROPTEST_CASES` from the environment for longer runs.
 pub fn config() -> ProptestConfig {
     let default = ProptestConfig::default();
@@ -288,7 +288,7 @@ pub fn config() -> ProptestConfig {
         cases: if std::env::var_os("PROPTEST_CASES").is_some() {
             default.cases
         } else {
-            96
+            256
         },
         ..default
     }
