@@ -17,7 +17,7 @@ pub const MAX_DENSE_EIGEN: usize = 4000;
 pub fn mass_eigenvalues(m: &SparseMatrix) -> Result<Vec<f64>, DeriveError> {
     let factor = m.kron_identity_factor(3);
     let decomposed = factor.as_ref().unwrap_or(m);
-    if decomposed.nrows() > MAX_DENSE_EIGEN {
+    if !within_dense_solve(decomposed) {
         // A scan needs them; with the mass fixed they are only listed (see `mass_step`).
         return Err(DeriveError::InvalidOption {
             name: "fit.mass",
@@ -35,8 +35,12 @@ pub fn mass_eigenvalues(m: &SparseMatrix) -> Result<Vec<f64>, DeriveError> {
 
 /// Whether [`mass_eigenvalues`] of `m` is within the dense solve's size.
 pub fn mass_eigenvalues_computable(m: &SparseMatrix) -> bool {
-    let rows = m.kron_identity_factor(3).map_or(m.nrows(), |s| s.nrows());
-    rows <= MAX_DENSE_EIGEN
+    within_dense_solve(m.kron_identity_factor(3).as_ref().unwrap_or(m))
+}
+
+/// The size rule of the dense eigenvalue solve, on the matrix actually decomposed.
+fn within_dense_solve(decomposed: &SparseMatrix) -> bool {
+    decomposed.nrows() <= MAX_DENSE_EIGEN
 }
 
 /// Drops null values (`|λ| ≤ null_tol · max|λ|`) and merges values within a relative
