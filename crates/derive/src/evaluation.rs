@@ -3,6 +3,7 @@
 //! the masses against the D-NURBS's, and the warnings.
 
 use nurbspring_dnurbs::{DnurbsModel, Geometry};
+use nurbspring_geom::GeomError;
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::State;
 
@@ -208,10 +209,10 @@ pub fn impulse(setup: &Setup, speed: f64) -> Result<State, DeriveError> {
             reason: "the second excitation needs a free control point".into(),
         })?;
     let direction = match model.geometry() {
-        Geometry::Surface(s) => {
-            let d = s.derivatives(u, v, 1)?;
-            normalize(cross(d.u, d.v)).unwrap_or([0.0, 0.0, 1.0])
-        }
+        Geometry::Surface(s) => match s.normal(u, v) {
+            Err(GeomError::DegenerateNormal { .. }) => [0.0, 0.0, 1.0],
+            n => n?,
+        },
         Geometry::Curve(c) => {
             let t = normalize(c.derivatives(u, 1)?.u).unwrap_or([1.0, 0.0, 0.0]);
             let axis = if t[2].abs() < 0.9 {
@@ -231,14 +232,6 @@ pub fn impulse(setup: &Setup, speed: f64) -> Result<State, DeriveError> {
     let mut velocities = vec![[0.0; 3]; model.geometry().n_control_points()];
     velocities[k] = direction.map(|x| speed * x);
     Ok(model.initial_state(&velocities, 0.0))
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
@@ -643,5 +636,87 @@ mod tests {
         assert_eq!(horizon(3.0, 0.0), 3.0);
         let state = State::new(vec![0.0; 6], vec![3.0, -4.0, 0.0, 0.0, 0.0, 1.0]);
         assert_eq!(initial_speed(&state), 5.0);
+    }
+
+    #[test]
+    fn triplicate_repeats_each_value_for_x_y_z() {
+        assert_eq!(triplicate(&[1.0, 2.5]), vec![1.0, 1.0, 1.0, 2.5, 2.5, 2.5]);
+        assert!(triplicate(&[]).is_empty());
+    }
+
+    fn validation_with(relative_rms: f64) -> Validation {
+        Validation {
+            integrator: "newmark".into(),
+            substeps: 1,
+            reference: ReferenceKind::Modal,
+            horizon: 1.0,
+            dt: 0.01,
+            rms: relative_rms,
+            max_abs: relative_rms,
+            relative_rms,
+            relative_rms_z: relative_rms,
+            dnurbs_amplitude: 1.0,
+            dnurbs_period: None,
+            msm_period: None,
+            samples: 101,
+            dnurbs_energy_drift: None,
+            msm_energy_drift: None,
+            msm_stopped: None,
+            probes: Vec::new(),
+        }
+    }
+
+    fn candidate(m: f64) -> crate::outcome::MassCandidate {
+        crate::outcome::MassCandidate {
+            m,
+            rms: 0.0,
+            max_abs: 0.0,
+            integrator: nurbspring_sim::IntegratorKind::Newmark,
+            substeps: 1,
+            stopped: None,
+        }
+    }
+
+    /// Each warning exactly when its number crosses its threshold: the free mass ratio
+    /// `free_msm / free_dnurbs` outside [1/2, 2] (2.5 warns, 1.5 does not), a selected mass at
+    /// either edge of the paper's scan (not inside it), a class clamped to zero (paper only).
+    #[test]
+    fn warnings_against_their_thresholds() {
+        let quiet = validation_with(0.5 * WARN_RELATIVE_RMS);
+        let rows = [crate::outcome::FrequencyRow {
+            mode: 1,
+            dnurbs: 1.0,
+            msm: 1.0,
+            relative_difference: 0.0,
+            mac: None,
+        }];
+        let masses = |free_msm: f64, free_dnurbs: f64, selected: f64| MassReport {
+            candidates: vec![candidate(1.0), candidate(2.0), candidate(3.0)],
+            selected,
+            free_msm,
+            free_dnurbs,
+            ..MassReport::default()
+        };
+        let warn = |method, mass: &MassReport, clamped: &[String]| {
+            warnings(method, &quiet, &quiet, &rows, mass, clamped)
+        };
+        assert!(warn(Method::Modal, &masses(3.0, 2.0, 2.0), &[]).is_empty());
+        let w = warn(Method::Modal, &masses(5.0, 2.0, 2.0), &[]);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains("(2.500×)"), "{w:?}");
+        assert!(warn(Method::Modal, &masses(0.9, 2.0, 2.0), &[])[0].contains("(0.450×)"));
+        // The scan's edges, for the paper's derivation only.
+        for (selected, edge) in [(1.0, true), (2.0, false), (3.0, true)] {
+            let w = warn(Method::Paper, &masses(2.0, 2.0, selected), &[]);
+            assert_eq!(w.len(), usize::from(edge), "{selected}: {w:?}");
+            assert!(
+                !edge || w[0].contains("at the edge of the scan [1, 3]"),
+                "{w:?}"
+            );
+            assert!(warn(Method::Modal, &masses(2.0, 2.0, selected), &[]).is_empty());
+        }
+        let clamped = ["k_bend".to_string()];
+        let w = warn(Method::Paper, &masses(2.0, 2.0, 2.0), &clamped);
+        assert_eq!(w, vec!["k_bend was clamped to 0 by k >= 0".to_string()]);
     }
 }

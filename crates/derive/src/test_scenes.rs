@@ -9,8 +9,13 @@ use crate::setup::{Config, FitOptions, InitialConditions, Method, Setup, TimeSet
 /// A paper-method setup on `geometry`: unit μ and α, the outer ring fixed, the paper's
 /// spring classes on the default lattice, a short Newmark reference.
 pub(crate) fn setup(geometry: Geometry) -> Setup {
+    Setup::new(&config(geometry)).unwrap()
+}
+
+/// The configuration of [`setup`].
+pub(crate) fn config(geometry: Geometry) -> Config {
     let alpha22 = if geometry.is_curve() { 0.0 } else { 1.0 };
-    let config = Config {
+    Config {
         method: Method::Paper,
         geometry,
         material: Material {
@@ -39,6 +44,5 @@ pub(crate) fn setup(geometry: Geometry) -> Setup {
         fit: FitOptions::default(),
         probes: vec![(0.5, 0.5)],
         given: None,
-    };
-    Setup::new(&config).unwrap()
+    }
 }

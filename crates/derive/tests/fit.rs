@@ -8,8 +8,7 @@ use nurbspring_msm::{Class, Constants, LatticeOptions, ParameterGrid, SpringKind
 
 /// The paper's surface (docs/math.md §7), slightly curved so that every class has out-of-plane terms.
 fn surface(curved: bool) -> NurbsSurface {
-    let ku = KnotVector::try_new(vec![0., 0., 0., 0., 0.25, 0.5, 0.75, 1., 1., 1., 1.], 3).unwrap();
-    let kv = KnotVector::try_new(vec![0., 0., 0., 0., 0.5, 1., 1., 1., 1.], 3).unwrap();
+    let (ku, kv) = paper_knots();
     let px = [0., 0.25, 0.75, 1.52, 2.5, 2.75, 3.];
     let py = [0., 0.83, 2.5, 4.16, 5.];
     let mut pts = Vec::new();
@@ -24,6 +23,13 @@ fn surface(curved: bool) -> NurbsSurface {
         }
     }
     NurbsSurface::try_new(ku, kv, pts, vec![1.0; 35]).unwrap()
+}
+
+fn paper_knots() -> (KnotVector, KnotVector) {
+    (
+        KnotVector::try_new(vec![0., 0., 0., 0., 0.25, 0.5, 0.75, 1., 1., 1., 1.], 3).unwrap(),
+        KnotVector::try_new(vec![0., 0., 0., 0., 0.5, 1., 1., 1., 1.], 3).unwrap(),
+    )
 }
 
 fn lattice(s: &NurbsSurface, bending: bool, k: [f64; 3], grid: ParameterGrid) -> SpringLattice {
@@ -465,4 +471,41 @@ fn spectral_residual_and_fit_against_closed_forms_and_power_iteration() {
     assert!((r - want).abs() < 1e-8 * want, "{r} vs {want}");
     let frob = fit.solve(false).unwrap();
     assert!(r <= fit.relative_spectral_residual(&frob).unwrap() * (1.0 + 1e-12));
+}
+
+/// The reported spectrum of a spring lattice at rest maps round-off eigenvalues to exactly
+/// zero: a flat lattice of structural and shear springs, free, in a plane tilted off every
+/// axis (so that its zero modes are not exact in floating point) and stiff (so that the
+/// round-off is far from 1 in absolute terms), has one zero per node (its out-of-plane
+/// displacement) and three in-plane rigid motions; every other frequency is well above them.
+#[test]
+fn the_spectrum_of_a_free_flat_lattice_has_its_zero_modes() {
+    let flat = surface(false);
+    let (a, b) = (0.3f64, 0.4f64);
+    let rotate = |p: [f64; 3]| {
+        // About x by a, then about y by b.
+        let (y, z) = (
+            a.cos() * p[1] - a.sin() * p[2],
+            a.sin() * p[1] + a.cos() * p[2],
+        );
+        let (x, z) = (b.cos() * p[0] + b.sin() * z, -b.sin() * p[0] + b.cos() * z);
+        [x, y, z]
+    };
+    let (ku, kv) = paper_knots();
+    let tilted = NurbsSurface::try_new(
+        ku,
+        kv,
+        flat.control_points().iter().map(|&p| rotate(p)).collect(),
+        flat.weights().to_vec(),
+    )
+    .unwrap();
+    let lat = lattice(&tilted, false, [3e3, 1e3, 0.0], ParameterGrid::Knots);
+    assert!(lat.fixed.iter().all(|f| !f));
+    let omega = nurbspring_derive::msm_spectrum(&lat).unwrap();
+    assert_eq!(omega.len(), 3 * lat.n_nodes());
+    let zeros = omega.iter().filter(|&&w| w == 0.0).count();
+    assert_eq!(zeros, lat.n_nodes() + 3, "{omega:?}");
+    let top = omega.last().unwrap();
+    let lowest_nonzero = omega.iter().find(|&&w| w > 0.0).unwrap();
+    assert!(*lowest_nonzero > 1e-3 * top, "{lowest_nonzero} vs {top}");
 }

@@ -4,7 +4,7 @@
 use nurbspring_derive::paper::paper_constants;
 use nurbspring_derive::paper::{greville_net, reproduce};
 use nurbspring_derive::{Config, FitOptions, InitialConditions, TimeSettings, derive_msm};
-use nurbspring_dnurbs::{Constraints, DnurbsOptions, Loads, Material};
+use nurbspring_dnurbs::{Constraints, DnurbsOptions, Loads, Material, RestShape};
 use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_msm::LatticeOptions;
 use nurbspring_sim::IntegratorKind;
@@ -69,6 +69,33 @@ fn derivation_invariants() {
     assert!(fit.all_dofs.relative_residual <= given.relative_residual_all_dofs.unwrap() + 1e-12);
     assert!(fit.free_dofs.relative_residual <= given.relative_residual_free_dofs.unwrap() + 1e-12);
     assert!(fit.trust_region.max_relative_difference_to_closed_form < 1e-8);
+    // … and is the largest relative difference of the trust region's constants to the closed
+    // form's of the selected reading, recomputed.
+    let recomputed = fit
+        .classes
+        .iter()
+        .map(|&c| {
+            let (a, b) = (
+                fit.trust_region.result.constants.value(c),
+                fit.selected.constants.value(c),
+            );
+            (a - b).abs() / b.abs()
+        })
+        .fold(0.0, f64::max);
+    println!("max relative difference {recomputed:e}");
+    assert_eq!(
+        fit.trust_region.max_relative_difference_to_closed_form,
+        recomputed
+    );
+    // The frequency table pairs the distinct non-zero frequencies by rank.
+    assert!(!d.frequencies.is_empty());
+    for row in &d.frequencies {
+        assert!(row.dnurbs > 0.0 && row.msm > 0.0, "{row:?}");
+    }
+    // The flat lattice at rest has no out-of-plane stiffness: one zero frequency per free
+    // node (its z), and the in-plane ones are not zero.
+    let zeros = d.spectrum.msm.iter().filter(|&&w| w == 0.0).count();
+    assert_eq!(zeros, 3, "{:?}", d.spectrum.msm);
     // M = S ⊗ I_3 with 35 distinct eigenvalues of S; they sum to trace(S) = trace(M)/3.
     let trace: f64 = setup.model().matrices().mass.diagonal().iter().sum();
     let sum: f64 = d.mass.eigenvalues.iter().sum();
@@ -167,6 +194,22 @@ fn reproduction_reports_every_reading() {
     }
     assert_eq!(report.fits.len(), 12);
     assert_eq!(report.dynamics.len(), 20);
+    // Only the default reading (printed net, p_rest = p(0)) also runs over the long horizon.
+    use nurbspring_derive::paper::{ControlNet, LONG_HORIZON};
+    let t_end = paper_config().time.t_end;
+    for d in &report.dynamics {
+        let default = d.net == ControlNet::Printed && d.rest_shape == RestShape::Initial;
+        let long = d.t_end == LONG_HORIZON * t_end;
+        assert!(long || d.t_end == t_end, "{}", d.t_end);
+        assert!(
+            !long || default,
+            "{:?} {:?} over {}",
+            d.net,
+            d.rest_shape,
+            d.t_end
+        );
+    }
+    assert!(report.dynamics.iter().any(|d| d.t_end > t_end));
     assert!(report.verdicts.len() >= 6);
     for line in &report.verdicts {
         println!(
