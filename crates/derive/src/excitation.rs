@@ -294,3 +294,36 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::modal::tests::chain;
+
+    /// The fixed-fixed chain's frequencies `2 √(k/m) sin(jπ / (2(n + 1)))`, the lowest few
+    /// and the highest, at stiffness scales from 1e-10 to 1e10.
+    #[test]
+    fn chain_frequencies_at_every_scale() {
+        let n = 12;
+        let exact = |k: f64, m: f64, j: usize| {
+            2.0 * (k / m).sqrt() * (j as f64 * std::f64::consts::PI / (2.0 * (n + 1) as f64)).sin()
+        };
+        for k in [1e-10, 1.0, 1e10] {
+            for m in [1e-3, 1.0] {
+                let l = chain(n, k);
+                let (omega, vectors) = msm_modes(&l, &vec![m; n], 4).unwrap();
+                assert_eq!((omega.len(), vectors.ncols()), (4, 4));
+                for (j, w) in omega.iter().enumerate() {
+                    let e = exact(k, m, j + 1);
+                    assert!(
+                        (w - e).abs() < 1e-9 * e,
+                        "k {k}, m {m}, mode {j}: {w} vs {e}"
+                    );
+                }
+                let top = highest_frequency(&l, &vec![m; n]);
+                let e = exact(k, m, n);
+                assert!((top - e).abs() < 1e-6 * e, "k {k}, m {m}: {top} vs {e}");
+            }
+        }
+    }
+}

@@ -596,6 +596,33 @@ mod tests {
         assert!(fx < rosenbrock(&[-1.2, 1.0]) && fx > 1e-3, "{x:?} {fx}");
     }
 
+    /// A start whose simplex has equal values at every vertex, far from the minimum: the
+    /// method must not take equal values for convergence while the simplex is large.
+    /// `f = (x(x − 6))² + (y(y − 6))² + (x + y − 3)²` is 9 at (0, 0), (6, 0) and (0, 6); its
+    /// minimum, where ∇f = 0, is found and checked by the gradient in closed form.
+    #[test]
+    fn nelder_mead_does_not_stop_on_a_level_simplex() {
+        let f = |x: &[f64]| {
+            (x[0] * (x[0] - 6.0)).powi(2)
+                + (x[1] * (x[1] - 6.0)).powi(2)
+                + (x[0] + x[1] - 3.0).powi(2)
+        };
+        assert_eq!(
+            (f(&[0.0, 0.0]), f(&[6.0, 0.0]), f(&[0.0, 6.0])),
+            (9.0, 9.0, 9.0)
+        );
+        let (x, fx) = nelder_mead(&f, &[0.0, 0.0], 6.0, 2000);
+        let gradient = |x: &[f64]| {
+            let s = 2.0 * (x[0] + x[1] - 3.0);
+            [0, 1].map(|i| 2.0 * x[i] * (x[i] - 6.0) * (2.0 * x[i] - 6.0) + s)
+        };
+        let g = gradient(&x);
+        assert!(
+            fx < 9.0 && g[0].abs() < 1e-4 && g[1].abs() < 1e-4,
+            "{x:?} {fx} {g:?}"
+        );
+    }
+
     fn matrix(rows: [[f64; 2]; 2]) -> DenseMatrix {
         DenseMatrix::from_fn(2, 2, |i, j| rows[i][j])
     }
@@ -614,7 +641,7 @@ mod tests {
         // The indefinite one's eigenvalues are (−1 ± √10)/2.
         let indefinite = matrix([[-2.0, 0.5], [0.5, 1.0]]);
         for (h, lam_min) in [(h, 0.0), (indefinite, (-1.0 - 10f64.sqrt()) / 2.0)] {
-            for radius in [0.05, 0.3] {
+            for radius in [0.05, 0.3, 0.9] {
                 let s = trust_region_step(&h, &g, radius).unwrap();
                 assert!((norm(&s) - radius).abs() < 1e-12 * radius, "{s:?}");
                 let hs = h.mul_vec(&s);

@@ -204,3 +204,111 @@ impl BlockQp {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Random problems `H = BᵀB + diag(ε, d)` with B of `r` rows (so the mass block is
+    /// `diag(d) + SᵀS` with `S` the mass columns of B), from a fixed generator.
+    fn problems(count: usize) -> Vec<BlockQp> {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let (c, n, r) = (2, 5, 3);
+        (0..count)
+            .map(|_| {
+                let b = DenseMatrix::from_fn(r, c + n, |_, _| next());
+                let eps = 0.1 + 0.5 * next().abs();
+                BlockQp {
+                    hkk: DenseMatrix::from_fn(c, c, |i, j| {
+                        (0..r).map(|q| b[(q, i)] * b[(q, j)]).sum::<f64>()
+                            + if i == j { eps } else { 0.0 }
+                    }),
+                    hkm: DenseMatrix::from_fn(c, n, |i, a| {
+                        (0..r).map(|q| b[(q, i)] * b[(q, c + a)]).sum()
+                    }),
+                    d: (0..n).map(|_| 0.2 + next().abs()).collect(),
+                    s: DenseMatrix::from_fn(r, n, |q, a| b[(q, c + a)]),
+                    g: (0..c + n).map(|_| 2.0 * next()).collect(),
+                }
+            })
+            .collect()
+    }
+
+    /// H as a dense matrix, column by column through `apply`.
+    fn dense(qp: &BlockQp) -> DenseMatrix {
+        let t = qp.c() + qp.n();
+        let cols: Vec<Vec<f64>> = (0..t)
+            .map(|j| {
+                let mut e = vec![0.0; t];
+                e[j] = 1.0;
+                qp.apply(&e)
+            })
+            .collect();
+        DenseMatrix::from_fn(t, t, |i, j| cols[j][i])
+    }
+
+    /// The minimizer over `z ≥ 0` by enumeration: the passive set whose equality-constrained
+    /// minimizer is positive and whose multipliers `g − Hz` are ≤ 0 elsewhere (unique, H
+    /// being positive definite).
+    fn by_enumeration(h: &DenseMatrix, g: &[f64]) -> Vec<f64> {
+        let t = g.len();
+        for mask in 0..(1u32 << t) {
+            let p: Vec<usize> = (0..t).filter(|&j| mask & (1 << j) != 0).collect();
+            let hp = DenseMatrix::from_fn(p.len(), p.len(), |i, j| h[(p[i], p[j])]);
+            let gp: Vec<f64> = p.iter().map(|&j| g[j]).collect();
+            let zp = if p.is_empty() {
+                Vec::new()
+            } else {
+                solve_dense(&hp, &gp).unwrap()
+            };
+            if zp.iter().any(|&v| v <= 0.0) {
+                continue;
+            }
+            let mut z = vec![0.0; t];
+            for (&j, &v) in p.iter().zip(&zp) {
+                z[j] = v;
+            }
+            let hz = h.mul_vec(&z);
+            if (0..t).all(|j| mask & (1 << j) != 0 || g[j] - hz[j] <= 1e-12) {
+                return z;
+            }
+        }
+        panic!("no KKT point");
+    }
+
+    /// The active-set solution equals the enumerated one, from the origin and from a start
+    /// with every unknown positive, and the structured passive solves equal dense ones.
+    #[test]
+    fn the_active_set_solution_against_enumeration() {
+        let mut bounded = 0;
+        for (case, qp) in problems(60).iter().enumerate() {
+            let h = dense(qp);
+            let expected = by_enumeration(&h, &qp.g);
+            bounded += expected.iter().filter(|&&v| v == 0.0).count();
+            let t = qp.g.len();
+            for start in [vec![0.0; t], vec![0.5; t]] {
+                let z = qp.solve_nonnegative(start.clone()).unwrap();
+                for j in 0..t {
+                    assert!(
+                        (z[j] - expected[j]).abs() < 1e-10 * (1.0 + expected[j].abs()),
+                        "case {case} from {:?}: {z:?} vs {expected:?}",
+                        start[0]
+                    );
+                }
+            }
+            // Every unknown passive: the plain solve of H z = g.
+            let all = qp.solve_passive(&vec![true; t]).unwrap();
+            let direct = solve_dense(&h, &qp.g).unwrap();
+            for j in 0..t {
+                assert!((all[j] - direct[j]).abs() < 1e-10 * (1.0 + direct[j].abs()));
+            }
+        }
+        assert!(bounded >= 60, "{bounded}");
+    }
+}

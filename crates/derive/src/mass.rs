@@ -122,5 +122,8 @@ mod tests {
     fn merges_repeated_and_drops_null() {
         let v = distinct_non_null(&[3.0, 1e-20, 1.0, 1.0 + 1e-12, 2.0, 3.0], 1e-12, 1e-9);
         assert_eq!(v, vec![1.0, 2.0, 3.0]);
+        // Null is relative to the largest |λ| (here 4000): 1e-9 is null, 1e-8 is not.
+        let v = distinct_non_null(&[4e3, 1e-9, -1e-8, 2e3], 1e-12, 1e-9);
+        assert_eq!(v, vec![-1e-8, 2e3, 4e3]);
     }
 }

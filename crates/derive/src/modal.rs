@@ -273,7 +273,7 @@ pub(crate) fn combine(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use nurbspring_linalg::nonnegative_least_squares;
     use nurbspring_msm::{LinearKind, Region};
@@ -386,6 +386,39 @@ mod tests {
         );
         for (x, y) in mine.iter().zip(&z) {
             assert!((x - y).abs() <= 1e-7 * (1.0 + y.abs()), "{mine:?} vs {z:?}");
+        }
+    }
+
+    /// `k · tridiag(−1, 2, −1)` of a chain of `n` nodes between two fixed ends.
+    pub(crate) fn chain(n: usize, k: f64) -> SparseMatrix {
+        let mut t = Vec::new();
+        for i in 0..n {
+            t.push((i, i, 2.0 * k));
+            if i + 1 < n {
+                t.push((i, i + 1, -k));
+                t.push((i + 1, i, -k));
+            }
+        }
+        SparseMatrix::from_triplets(n, n, &t).unwrap()
+    }
+
+    /// The fixed-fixed chain's lowest frequency `2 √(k/m) sin(π / (2(n + 1)))` at stiffness
+    /// scales from 1e-10 to 1e10: the shift of the shift-invert solve must follow the scale of
+    /// `L` (a fixed shift of −1 cannot resolve eigenvalues of 1e-10 against 1). The chain is
+    /// long enough that the Krylov space does not cover it.
+    #[test]
+    fn the_lowest_frequency_of_a_chain_at_every_scale() {
+        let n = 300;
+        for k in [1e-10, 1.0, 1e10] {
+            for m in [1e-3, 1.0] {
+                let w = lowest_frequency(&chain(n, k), &vec![m; n]).unwrap();
+                let exact =
+                    2.0 * (k / m).sqrt() * (std::f64::consts::PI / (2.0 * (n + 1) as f64)).sin();
+                assert!(
+                    (w - exact).abs() < 1e-9 * exact,
+                    "k {k}, m {m}: {w} vs {exact}"
+                );
+            }
         }
     }
 }

@@ -303,4 +303,41 @@ mod point_tests {
         assert_eq!(mac(&[1.0, 2.0], &[-2.0, -4.0]), 1.0);
         assert_eq!(mac(&[1.0, 0.0], &[0.0, 3.0]), 0.0);
     }
+
+    /// A constant of 10⁶ with round-off flutter (10⁻¹⁰, below 10⁻¹⁴ of the mean) has no
+    /// period; the same flutter on a mean of 0.5 (above 10⁻¹⁴) is a signal.
+    #[test]
+    fn round_off_on_a_large_constant_is_no_period() {
+        let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.01).collect();
+        let flutter = |mean: f64| -> Vec<f64> {
+            t.iter()
+                .map(|t| mean + 1e-10 * (2.0 * std::f64::consts::PI * t / 0.3).sin())
+                .collect()
+        };
+        assert_eq!(dominant_period(&t, &flutter(1e6)), None);
+        let p = dominant_period(&t, &flutter(0.5)).unwrap();
+        assert!((p - 0.3).abs() < 0.01, "{p}");
+    }
+
+    /// Samples exactly at the mean: `… −1, 0, 1, 0, −1 …` (period 4 samples) crosses upward
+    /// once a period, at the 0 between −1 and 1, not again at the 1 after it.
+    #[test]
+    fn a_sample_on_the_mean_is_one_crossing() {
+        // Ten whole periods, so that the mean is exactly 0.
+        let t: Vec<f64> = (0..40).map(|i| i as f64).collect();
+        let z: Vec<f64> = (0..40).map(|i| [-1.0, 0.0, 1.0, 0.0][i % 4]).collect();
+        assert_eq!(dominant_period(&t, &z), Some(4.0));
+    }
+
+    /// With a reference that does not move, the relative RMS is undefined (NaN), whatever the
+    /// other does.
+    #[test]
+    fn a_still_reference_has_no_relative_error() {
+        let t = [0.0, 1.0, 2.0];
+        let still = [[1.0, 2.0, 3.0]; 3];
+        let moving = [[1.0, 2.0, 3.0], [1.0, 2.0, 4.0], [1.0, 2.0, 3.0]];
+        let c = compare_points(&t, &still, &moving);
+        assert!(c.relative_rms.is_nan() && c.rms > 0.0, "{c:?}");
+        assert_eq!(c.reference_amplitude, 0.0);
+    }
 }
