@@ -141,3 +141,61 @@ fn is_stop(e: &DeriveError) -> bool {
         SimError::Diverged { .. } | SimError::Unstable { .. } | SimError::NewtonFailed { .. }
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use nurbspring_dnurbs::Geometry;
+    use nurbspring_geom::{KnotVector, NurbsSurface};
+    use nurbspring_sim::IntegratorKind;
+
+    use super::*;
+
+    /// Every third step of a D-NURBS run and of an MSM run is kept (steps 0, 3, 6, 9 of ten),
+    /// with its probe point.
+    #[test]
+    fn every_nth_sample_is_kept() {
+        let ku = KnotVector::clamped_uniform(3, 2).unwrap();
+        let (g, n) = (ku.greville(), ku.n_basis());
+        let pts = g
+            .iter()
+            .flat_map(|&u| g.iter().map(move |&v| [u, v, 0.1 * u * v]))
+            .collect();
+        let s = NurbsSurface::try_new(ku.clone(), ku, pts, vec![1.0; n * n]).unwrap();
+        let setup = crate::test_scenes::setup(Geometry::Surface(s.clone()));
+        let opts = RunOptions::new(0.01, 0.1, IntegratorKind::Newmark);
+        let every = Recording { every: 3 };
+        let expected = [0.0, 0.03, 0.06, 0.09];
+        let same = |t: &[f64]| {
+            t.len() == expected.len() && t.iter().zip(&expected).all(|(a, b)| (a - b).abs() < 1e-12)
+        };
+        let omega = Omega::new(&Geometry::Surface(s.clone()), &[(0.5, 0.5)], false).unwrap();
+        let (traj, outcome) = record(
+            Watched::Dnurbs {
+                model: setup.model(),
+                probes: &omega,
+            },
+            setup.dnurbs_initial().clone(),
+            &opts,
+            every,
+            &mut |_, _| {},
+        );
+        outcome.unwrap();
+        assert!(same(&traj.t), "{:?}", traj.t);
+        assert_eq!(traj.probes[0].len(), 4);
+        assert_eq!(traj.probes[0][0], s.point(0.5, 0.5).unwrap());
+        let model = MsmModel::new(setup.lattice().clone()).unwrap();
+        let initial = model.initial_state(&[]);
+        let (traj, outcome) = record(
+            Watched::Msm {
+                model: &model,
+                nodes: &[0],
+            },
+            initial,
+            &opts,
+            every,
+            &mut |_, _| {},
+        );
+        outcome.unwrap();
+        assert!(same(&traj.t), "{:?}", traj.t);
+    }
+}

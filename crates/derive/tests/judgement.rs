@@ -634,7 +634,7 @@ fn the_modal_derivation_under_area_integration() {
 }
 
 /// The exact reduction onto a Greville lattice (as many free nodes as free control points):
-/// its frequencies are the D-NURBS's, and its static response to gravity, `K_T⁻¹ f_T`, is the
+/// its motion is the D-NURBS's at the nodes, its frequencies are the D-NURBS's, and its static response to gravity, `K_T⁻¹ f_T`, is the
 /// D-NURBS's steady state seen at the free nodes.
 #[test]
 fn the_exact_reduction_reproduces_the_dnurbs_at_the_nodes() {
@@ -642,6 +642,11 @@ fn the_exact_reduction_reproduces_the_dnurbs_at_the_nodes() {
     config.lattice.grid = ParameterGrid::Greville;
     config.loads.gravity = [0.0, 0.0, -1.0];
     let (d, setup) = derive_linear(&config, None).unwrap();
+    // Started from the nodes' share of the D-NURBS's initial state (the scene's velocity), the
+    // exact reduction follows the D-NURBS at the watched node to round-off.
+    let v = &d.derived.validation;
+    assert!(v.dnurbs_amplitude > 1e-3, "{}", v.dnurbs_amplitude);
+    assert!(v.relative_rms < 1e-8, "{}", v.relative_rms);
     let r = d.reduction.as_ref().expect("a reduction");
     let n = r.free.len();
     assert_eq!(n, 12);
@@ -751,5 +756,93 @@ fn a_chain_under_arc_length_integration_has_its_dual_cell_masses() {
             "node {a}: {} vs {expected}",
             lattice.masses[a]
         );
+    }
+}
+
+/// The scene's Δt against the derived lattice's explicit limit `2/ω_max`: below it at 0.01,
+/// beyond it at 1.5 × the limit (the derived model itself does not depend on Δt).
+#[test]
+fn the_explicit_limit_is_judged_against_the_scenes_step() {
+    let mut config = config(Method::Modal);
+    let (d, _) = derive_linear(&config, None).unwrap();
+    let limit = d.derived.dt_critical;
+    assert!(config.time.dt < limit && !d.derived.dt_exceeds_explicit_limit);
+    assert!(close(limit, 2.0 / d.derived.omega_max, 1e-15));
+    config.time.dt = 1.5 * limit;
+    config.time.t_end = 20.0 * config.time.dt;
+    assert!(
+        config.time.dt < 2.0,
+        "a step beyond 2 s would not tell 2/ω from 2"
+    );
+    let (d, _) = derive_linear(&config, None).unwrap();
+    assert!(close(d.derived.dt_critical, limit, 1e-12));
+    assert!(d.derived.dt_exceeds_explicit_limit);
+}
+
+/// Four free control points in a row along u (a 6 × 3 net with its outer ring fixed) and four
+/// free nodes in a row along v (a 3 × 6 grid): every node's row of Ω is a multiple of the same
+/// vector, so `Ω K⁻¹ Ωᵀ` has rank one and the reduction is refused, naming the grid. The
+/// material is soft (K⁻¹ large), so the null eigenvalues are far from 1 in absolute terms.
+#[test]
+fn a_reduction_whose_nodes_do_not_determine_the_surface_is_refused() {
+    let mut config = config(Method::Reduction);
+    let ku = KnotVector::clamped_uniform(3, 3).unwrap();
+    let kv = KnotVector::clamped_uniform(2, 1).unwrap();
+    let (gu, gv) = (ku.greville(), kv.greville());
+    let pts = gu
+        .iter()
+        .flat_map(|&u| gv.iter().map(move |&v| [2.0 * u, 1.5 * v, 0.1 * u * v]))
+        .collect();
+    config.geometry = Geometry::Surface(NurbsSurface::try_new(ku, kv, pts, vec![1.0; 18]).unwrap());
+    config.material = Material {
+        mu: 1e-3,
+        alpha11: 1e-4,
+        alpha22: 1e-4,
+        ..Material::default()
+    };
+    config.lattice.grid = ParameterGrid::Uniform {
+        nodes_u: 3,
+        nodes_v: 6,
+    };
+    let Err(e) = derive_linear(&config, None) else {
+        panic!("a singular reduction must be refused");
+    };
+    let text = e.to_string();
+    assert!(
+        text.contains("msm.grid") && text.contains("the reduction is singular"),
+        "{text}"
+    );
+}
+
+/// The reduction's judgement of singularity is relative: a stiffer material (every stiffness
+/// term × 10⁶, so `Ω K⁻¹ Ωᵀ` × 10⁻⁶) gives the same reduction with `K_T` × 10⁶ and the
+/// frequencies × 10³.
+#[test]
+fn the_reduction_scales_with_the_material() {
+    let mut config = config(Method::Reduction);
+    config.lattice.grid = ParameterGrid::Greville;
+    let (soft, _) = derive_linear(&config, None).unwrap();
+    for a in [
+        &mut config.material.alpha11,
+        &mut config.material.alpha22,
+        &mut config.material.beta11,
+        &mut config.material.beta22,
+    ] {
+        *a *= 1e6;
+    }
+    let (stiff, _) = derive_linear(&config, None).unwrap();
+    let (a, b) = (soft.reduction.unwrap(), stiff.reduction.unwrap());
+    let n = a.free.len();
+    for i in 0..n {
+        for j in 0..n {
+            let (x, y) = (a.stiffness[(i, j)], b.stiffness[(i, j)]);
+            assert!(
+                (y - 1e6 * x).abs() < 1e-8 * 1e6 * a.stiffness[(i, i)].abs(),
+                "{i} {j}: {y} vs {x}"
+            );
+        }
+    }
+    for (p, q) in soft.frequencies.iter().zip(&stiff.frequencies) {
+        assert!(close(q.dnurbs, 1e3 * p.dnurbs, 1e-8) && close(q.msm, 1e3 * p.msm, 1e-8));
     }
 }

@@ -90,7 +90,8 @@ fn mac_of_modes() {
 }
 
 /// The closed-form response of a rigid mode (λ = 0) is the free motion `u₀ + v₀ t + ½ f t²`
-/// (unit mass), beside an oscillator of λ = 4 whose response is `u₀ cos 2t + v₀/2 sin 2t`.
+/// (unit mass), beside an oscillator of λ = 4 whose response is `u₀ cos 2t + v₀/2 sin 2t`;
+/// the energies are those of these motions.
 #[test]
 fn modal_response_of_a_rigid_mode_and_an_oscillator() {
     let k = SparseMatrix::from_diagonal(&[0.0, 4.0]);
@@ -101,7 +102,34 @@ fn modal_response_of_a_rigid_mode_and_an_oscillator() {
     let v0 = [[1.0, 0.5, 0.0], [0.0, -0.4, 0.0]];
     let f = [[0.0, 0.0, -2.0], [0.0; 3]];
     let watch = vec![vec![(0, 1.0)], vec![(1, 1.0)]];
-    let (points, _) = basis.response(&watch, &times, &u0, &v0, &f, None);
+    let origin = nurbspring_derive::EnergyOrigin {
+        elastic: 0.0,
+        internal: vec![[0.0; 3]; 2],
+        external: 0.0,
+        force: f.to_vec(),
+    };
+    let (points, energies) = basis.response(&watch, &times, &u0, &v0, &f, Some(&origin));
+    // The energies from the motions above: kinetic ½ Σ |u̇|² (unit masses), elastic ½ · 4 |u₁|²,
+    // load potential −f · u₀.
+    for (s, &t) in times.iter().enumerate() {
+        let (c, sn) = ((2.0 * t).cos(), (2.0 * t).sin());
+        let (mut kinetic, mut elastic, mut external) = (0.0, 0.0, 0.0);
+        for x in 0..3 {
+            let rigid_rate = v0[0][x] + f[0][x] * t;
+            let oscillator_rate = -2.0 * u0[1][x] * sn + v0[1][x] * c;
+            kinetic += 0.5 * (rigid_rate * rigid_rate + oscillator_rate * oscillator_rate);
+            let oscillator = u0[1][x] * c + v0[1][x] / 2.0 * sn;
+            elastic += 0.5 * 4.0 * oscillator * oscillator;
+            external -= f[0][x] * (u0[0][x] + v0[0][x] * t + 0.5 * f[0][x] * t * t);
+        }
+        let e = energies[s];
+        for (got, expected) in e.iter().zip([kinetic, elastic, external]) {
+            assert!(
+                (got - expected).abs() < 1e-14,
+                "at {t}: {e:?} vs {kinetic}, {elastic}, {external}"
+            );
+        }
+    }
     for (s, &t) in times.iter().enumerate() {
         for x in 0..3 {
             let rigid = u0[0][x] + v0[0][x] * t + 0.5 * f[0][x] * t * t;

@@ -3,7 +3,7 @@
 
 use nurbspring_derive::paper::paper_constants;
 use nurbspring_derive::paper::{greville_net, reproduce};
-use nurbspring_derive::{Config, FitOptions, InitialConditions, TimeSettings, derive_msm};
+use nurbspring_derive::{Config, FitDofs, FitOptions, InitialConditions, TimeSettings, derive_msm};
 use nurbspring_dnurbs::{Constraints, DnurbsOptions, Loads, Material, RestShape};
 use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_msm::LatticeOptions;
@@ -66,6 +66,15 @@ fn derivation_invariants() {
     let fit = d.paper_fit().unwrap();
     // The optimum is no worse than the paper's constants on the same reading.
     let given = d.given.as_ref().unwrap();
+    // The given (paper's) constants' residuals, recomputed on each reading's fit problem.
+    for (dofs, reported) in [
+        (FitDofs::All, given.relative_residual_all_dofs),
+        (FitDofs::Free, given.relative_residual_free_dofs),
+    ] {
+        let problem = setup.fit(dofs).unwrap();
+        let k = paper_constants().values_of(problem.classes());
+        assert_eq!(reported, Some(problem.relative_residual(&k).unwrap()));
+    }
     assert!(fit.all_dofs.relative_residual <= given.relative_residual_all_dofs.unwrap() + 1e-12);
     assert!(fit.free_dofs.relative_residual <= given.relative_residual_free_dofs.unwrap() + 1e-12);
     assert!(fit.trust_region.max_relative_difference_to_closed_form < 1e-8);
