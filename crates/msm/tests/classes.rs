@@ -88,3 +88,19 @@ fn constants_are_set_replaced_and_removed_by_class() {
     c.remove(twist);
     assert!(c.is_empty());
 }
+
+/// `from_values` pairs `classes[i]` with `values[i]`, so it equals the explicit pairs; a
+/// later class of the same name wins, as in `from_pairs`.
+#[test]
+fn constants_from_values_pair_classes_with_values_by_index() {
+    let edge = Class::Spring(SpringKind::Structural);
+    let bend = Class::Linear(LinearKind::BendV, Region::Interior);
+    let c = Constants::from_values(&[edge, bend], &[2.7, 0.3]);
+    assert_eq!(
+        (c.len(), c.get(edge), c.get(bend)),
+        (2, Some(2.7), Some(0.3))
+    );
+    assert_eq!(c, Constants::from_pairs([(bend, 0.3), (edge, 2.7)]));
+    let twice = Constants::from_values(&[edge, edge], &[1.0, 5.0]);
+    assert_eq!((twice.len(), twice.get(edge)), (1, Some(5.0)));
+}

@@ -4,8 +4,8 @@
 mod support;
 
 use nurbspring_msm::{
-    Class, Constants, FixedNodes, LatticeOptions, MAX_NODES, MsmError, MsmFile, MsmModel,
-    ParameterGrid, Spring, SpringKind, SpringLattice,
+    Class, Constants, FixedNodes, LatticeOptions, LinearElement, LinearKind, MAX_NODES, MsmError,
+    MsmFile, MsmModel, ParameterGrid, Region, Spring, SpringKind, SpringLattice,
 };
 use nurbspring_sim::DynamicModel;
 use support::tolerances::*;
@@ -442,6 +442,156 @@ fn validation_errors() {
     // Messages carry the values.
     let e = two_nodes(Spring { k: -3.5, ..ok }).unwrap_err().to_string();
     assert!(e.contains("-3.5"), "{e}");
+}
+
+/// The element rules of `validate` (docs: weight in (0, 1e30], k in [0, 1e30], finite
+/// coefficients, 2 to 4 distinct existing nodes), one broken at a time on a valid element.
+#[test]
+fn element_validation_errors() {
+    let base = curved_lattice(3, 3, 0.0);
+    let ok = LinearElement {
+        kind: LinearKind::BendU,
+        region: Region::Interior,
+        nodes: vec![0, 3, 6],
+        coefficients: vec![1.0, -2.0, 1.0],
+        weight: 0.5,
+        k: 1.0,
+    };
+    let check = |element: LinearElement| {
+        let mut l = base.clone();
+        l.elements.push(element);
+        l.validate()
+    };
+    assert!(check(ok.clone()).is_ok());
+    for weight in [0.0, -0.5, f64::INFINITY, f64::NAN, 2e30] {
+        assert!(
+            matches!(
+                check(LinearElement {
+                    weight,
+                    ..ok.clone()
+                }),
+                Err(MsmError::InvalidElement { element: 0, .. })
+            ),
+            "weight {weight}"
+        );
+    }
+    for k in [-1.0, f64::INFINITY, f64::NAN] {
+        assert!(
+            matches!(
+                check(LinearElement { k, ..ok.clone() }),
+                Err(MsmError::InvalidElement { element: 0, .. })
+            ),
+            "k {k}"
+        );
+    }
+    // k = 0 is allowed (a class switched off), the weight must stay positive.
+    assert!(
+        check(LinearElement {
+            k: 0.0,
+            ..ok.clone()
+        })
+        .is_ok()
+    );
+    let broken = [
+        LinearElement {
+            coefficients: vec![1.0, f64::NAN, 1.0],
+            ..ok.clone()
+        },
+        LinearElement {
+            nodes: vec![0, 3, 3],
+            ..ok.clone()
+        },
+        LinearElement {
+            nodes: vec![0],
+            coefficients: vec![1.0],
+            ..ok.clone()
+        },
+        LinearElement {
+            coefficients: vec![1.0, -1.0],
+            ..ok.clone()
+        },
+    ];
+    for element in broken {
+        assert!(
+            matches!(
+                check(element.clone()),
+                Err(MsmError::InvalidElement { element: 0, .. })
+            ),
+            "{element:?}"
+        );
+    }
+    assert!(matches!(
+        check(LinearElement {
+            nodes: vec![0, 3, 9],
+            ..ok
+        }),
+        Err(MsmError::MissingNode {
+            node: 9,
+            n_nodes: 9,
+            ..
+        })
+    ));
+}
+
+/// Without parameters or a grid, `node_nearest(u, v)` takes the point at fractions (u, v) of
+/// the nodes' bounding box and the node nearest to it in the x-y plane. Box [1, 5] × [−1, 1]
+/// (nodes on a 3 × 3 grid, listed out of order): (0.2, 0.2) is the point (1.8, −0.6), nearest
+/// to (1, −1) (squared distance 0.8, against 1.6 to (3, −1) and 1.0 to (1, 0));
+/// (0.9, 0.1) is (4.6, −0.8), nearest to (5, −1); (0.1, 0.9) is (1.4, 0.8), nearest to (1, 1).
+#[test]
+fn node_nearest_without_parameters_uses_the_bounding_box() {
+    let xs = [1.0, 3.0, 5.0];
+    let ys = [-1.0, 0.0, 1.0];
+    // Node a sits at (xs[a % 3], ys[2 - a / 3]): the top row first.
+    let positions: Vec<[f64; 3]> = (0..9).map(|a| [xs[a % 3], ys[2 - a / 3], 0.0]).collect();
+    let springs = (0..8)
+        .map(|a| Spring {
+            a,
+            b: a + 1,
+            kind: SpringKind::Structural,
+            k: 1.0,
+            rest_length: 1.0,
+        })
+        .collect();
+    let l = SpringLattice::from_parts(
+        positions.clone(),
+        vec![1.0; 9],
+        vec![0.0; 9],
+        vec![false; 9],
+        springs,
+        [0.0; 3],
+    )
+    .unwrap();
+    assert!(l.params.is_none() && l.grid.is_none());
+    let at = |x: f64, y: f64| {
+        positions
+            .iter()
+            .position(|p| p[0] == x && p[1] == y)
+            .unwrap()
+    };
+    assert_eq!(l.node_nearest(0.2, 0.2), at(1.0, -1.0));
+    assert_eq!(l.node_nearest(0.9, 0.1), at(5.0, -1.0));
+    assert_eq!(l.node_nearest(0.1, 0.9), at(1.0, 1.0));
+    assert_eq!(l.node_nearest(0.5, 0.5), at(3.0, 0.0));
+}
+
+/// A uniform grid of the smallest allowed size, 2 nodes along each direction: the ends of the
+/// curved patch's knot vectors [0, 0, 0, 1, 1, 1], so 2 × 2 nodes and 2 + 2 structural springs.
+#[test]
+fn uniform_grid_of_two_by_two_nodes_is_allowed() {
+    let o = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: 2,
+            nodes_v: 2,
+        },
+        constants: Constants::from_pairs([(Class::Spring(SpringKind::Structural), 1.0)]),
+        ..Default::default()
+    };
+    let s = curved_surface();
+    let (us, vs) = o.grid.parameters(&s).unwrap();
+    assert_eq!((us, vs), (vec![0.0, 1.0], vec![0.0, 1.0]));
+    let l = SpringLattice::from_surface(&s, &o, &[]).unwrap();
+    assert_eq!((l.grid, l.springs.len()), (Some((2, 2)), 4));
 }
 
 #[test]
