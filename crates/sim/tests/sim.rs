@@ -237,6 +237,84 @@ fn observer_sees_initial_state_and_every_step() {
     assert_eq!(summary.omega_max, None);
 }
 
+/// The energies of every sample, recomputed by hand from the sample's own state on the loaded
+/// chain: kinetic `½ m Σ vᵢ²`, elastic `½ k Σ (differences of u = q − rest, with the fixed
+/// ends)²`, external `−qᵀ f`, potential = elastic + external.
+#[test]
+fn samples_carry_the_energies_of_their_state() {
+    let c = chain();
+    let model = loaded_chain_model(&c);
+    let (q0, v0) = (initial_positions(c.n), initial_velocities(c.n));
+    let mut seen = 0;
+    let mut obs = |s: &Sample<'_>| {
+        let kinetic = 0.5 * c.m * s.v.iter().map(|v| v * v).sum::<f64>();
+        let u: Vec<f64> = s.q.iter().zip(&model.rest).map(|(q, r)| q - r).collect();
+        let mut stretch = u[0] * u[0] + u[c.n - 1] * u[c.n - 1];
+        for i in 0..c.n - 1 {
+            stretch += (u[i + 1] - u[i]).powi(2);
+        }
+        let elastic = 0.5 * c.k * stretch;
+        let external =
+            -s.q.iter()
+                .zip(&model.force)
+                .map(|(q, f)| q * f)
+                .sum::<f64>();
+        let scale = kinetic + elastic + external.abs();
+        for (name, got, want) in [
+            ("kinetic", s.kinetic, kinetic),
+            ("elastic", s.elastic, elastic),
+            ("external", s.external, external),
+            ("potential", s.potential, elastic + external),
+        ] {
+            assert!(
+                (got - want).abs() <= tol::EXACT * scale,
+                "step {}: {name} {got} vs {want} by hand",
+                s.step
+            );
+        }
+        seen += 1;
+    };
+    simulate(
+        &model,
+        State::new(q0, v0),
+        &RunOptions::new(0.1, 1.0, IntegratorKind::Newmark),
+        &mut obs,
+    )
+    .unwrap();
+    assert_eq!(seen, 11);
+}
+
+/// `step_count` is `⌈(t_end − t₀)/Δt⌉` from any start, not only from 0.
+#[test]
+fn step_count_by_hand_from_a_non_zero_start() {
+    assert_eq!(step_count(1.0, 2.0, 0.25), 4);
+    assert_eq!(step_count(1.0, 2.1, 0.25), 5);
+    assert_eq!(step_count(-1.0, 0.5, 0.5), 3);
+    assert_eq!(step_count(3.0, 3.0, 0.1), 0);
+    assert_eq!(step_count(3.0, 2.0, 0.1), 0);
+    // (0.3 − 0.1)/0.1 is 1.9999999999999998 in f64: within 1e-9 of 2, so 2 steps.
+    assert_eq!(step_count(0.1, 0.3, 0.1), 2);
+}
+
+/// The modal stepper's eigenvalues are the chain's `ω_j²` (closed form), ascending.
+#[test]
+fn modal_eigenvalues_are_the_squared_chain_frequencies() {
+    let c = chain();
+    let model = c.model();
+    let modal = integrators::Modal::new(&model, 0.05).unwrap();
+    let lambda = modal.eigenvalues();
+    assert_eq!(lambda.len(), c.n);
+    let top = c.omega(c.n).powi(2);
+    for (j, &l) in lambda.iter().enumerate() {
+        let want = c.omega(j + 1).powi(2);
+        assert!(
+            (l - want).abs() <= tol::MODAL * top,
+            "λ_{} = {l}, closed form {want}",
+            j + 1
+        );
+    }
+}
+
 // ------------------------------------------------------------------ Terzopoulos–Qin
 
 #[test]

@@ -189,4 +189,26 @@ mod tests {
             assert_eq!((sinc(-x), sinhc(-x)), (sinc(x), sinhc(x)));
         }
     }
+
+    /// Below 10⁻⁴ the series of `sinc` is correctly rounded. By the alternating series,
+    /// `sin x / x` lies between `1 − x²/6` and `1 − x²/6 + x⁴/120` (x⁴/120 < 10⁻¹⁸, a hundredth of
+    /// an ulp of 1), so the nearest f64 is within half an ulp of numbers just below 1 (2⁻⁵⁴ = ε/4)
+    /// of `1 − x²/6`; `sinc(x) − 1` is exact (Sterbenz) and `x²/6` carries a relative error of
+    /// 2ε. Between 2^−13.5 ≈ 8.6·10⁻⁵ and 10⁻⁴, x⁴ itself is more than half an ulp, so a fourth-
+    /// order term of the wrong size moves the result by an ulp.
+    #[test]
+    fn sinc_series_is_correctly_rounded_below_the_switch() {
+        for x in [8.8e-5f64, 9e-5, 9.2e-5, 9.5e-5, 9.7e-5, 9.9e-5, 9.99e-5] {
+            let second_order = x * x / 6.0;
+            let bound = 0.25 * f64::EPSILON + x.powi(4) / 120.0 + 2.0 * f64::EPSILON * second_order;
+            for y in [x, -x] {
+                let off = (sinc(y) - 1.0) + second_order;
+                assert!(
+                    off.abs() <= bound,
+                    "sinc({y}) is {} ulp from 1 − x²/6",
+                    off / (0.5 * f64::EPSILON)
+                );
+            }
+        }
+    }
 }
