@@ -220,6 +220,61 @@ fn weights_as_dofs_case(geometry: Geometry) {
     assert!(support::max_abs_diff(&f4_xyz, &f3) <= tol::SAME);
 }
 
+/// A tilted plane `z = a x + b y` over `[0, 2] × [0, 3]` (the flat patch with z = a x + b y
+/// at its control points, an affine map, so the surface is that plane): its area is
+/// `6 √(1 + a² + b²)`, and with area integration Σ M = 3 μ · area. The normal
+/// `c_u × c_v = 6 (−a, −b, 1)` has all three components non-zero, so each enters.
+#[test]
+fn area_integration_measures_a_tilted_plane() {
+    let (a, b, mu) = (0.5, -0.75, 2.0);
+    let flat = support::flat_patch(2, 3, 2, 2.0, 3.0);
+    let points: Vec<[f64; 3]> = flat
+        .control_points()
+        .iter()
+        .map(|&[x, y, _]| [x, y, a * x + b * y])
+        .collect();
+    let tilted = nurbspring_geom::NurbsSurface::try_new(
+        flat.basis_u().knots().clone(),
+        flat.basis_v().knots().clone(),
+        points,
+        flat.weights().to_vec(),
+    )
+    .unwrap();
+    let material = Material {
+        mu,
+        ..Material::default()
+    };
+    let area = 6.0 * (1.0 + a * a + b * b).sqrt();
+    for weights_as_dofs in [false, true] {
+        let options = DnurbsOptions {
+            integration: Integration::Area,
+            weights_as_dofs,
+            ..DnurbsOptions::default()
+        };
+        let m = assemble(
+            &Geometry::Surface(tilted.clone()),
+            &material,
+            &Loads::default(),
+            &options,
+        )
+        .unwrap();
+        // The x, y, z rows and columns only (with weights as unknowns every fourth dof is a
+        // weight).
+        let dpp = m.dofs_per_point;
+        let xyz: f64 = m
+            .mass
+            .triplets()
+            .filter(|&(i, j, _)| i % dpp < 3 && j % dpp < 3)
+            .map(|(_, _, v)| v)
+            .sum();
+        let want = 3.0 * mu * area;
+        assert!(
+            (xyz - want).abs() <= tol::SUM * want,
+            "weights as dofs {weights_as_dofs}: Σ M = {xyz}, 3 μ · area = {want}"
+        );
+    }
+}
+
 #[test]
 fn area_integration_measures_the_surface_and_the_curve() {
     let material = Material {

@@ -250,3 +250,41 @@ fn sparse_modes_above_the_dense_limit() {
         );
     }
 }
+
+/// A free-free string above the dense limit: the three rigid translations (ω = 0) make K
+/// singular, which the negative shift of the sparse solver must absorb; then the free-free
+/// string's `ω_1 = π √(α/μ)` (Neumann ends, `cos(π u)`) three times.
+#[test]
+fn sparse_modes_of_a_free_floating_string() {
+    let (alpha, mu) = (2.0, 0.5);
+    let model = DnurbsModel::new(
+        Geometry::Curve(support::straight_curve(2, 700, 1.0)),
+        Material {
+            mu,
+            alpha11: alpha,
+            ..Material::default()
+        },
+        Loads::default(),
+        &Constraints::default(),
+        DnurbsOptions::default(),
+    )
+    .unwrap();
+    assert!(model.n_free() > nurbspring_dnurbs::DENSE_MODES_LIMIT);
+    let modes = model.modes(6).unwrap();
+    assert_eq!(modes.omega.len(), 6);
+    let omega_1 = PI * (alpha / mu).sqrt();
+    for (i, w) in modes.omega.iter().enumerate() {
+        if i < 3 {
+            // ω² of a rigid translation is 0 up to the solver's tolerance relative to ω_1².
+            assert!(
+                w * w <= tol::SPARSE_EIGEN * omega_1 * omega_1,
+                "ω_{i} = {w}"
+            );
+        } else {
+            assert!(
+                (w - omega_1).abs() <= tol::SPARSE_EIGEN * omega_1,
+                "ω_{i} = {w}, exact {omega_1}"
+            );
+        }
+    }
+}

@@ -141,6 +141,42 @@ fn steady_state_with_free_weights_is_the_nonlinear_equilibrium() {
     assert_eq!(model.steady_state().unwrap(), steady.p);
 }
 
+/// Six times the loads of `rational_model`: the plain fixed-point iteration `q ← G(q)` does not
+/// converge within the default 200 iterations here (checked by emptying the Anderson history:
+/// it stalls), Anderson mixing does, and what it returns is an equilibrium, its residual
+/// recomputed from matrices assembled at that shape.
+#[test]
+fn anderson_mixing_reaches_the_equilibrium_under_larger_loads() {
+    let model = DnurbsModel::new(
+        Geometry::Surface(support::wavy_rational_patch()),
+        Material {
+            gamma: 0.0,
+            alpha11: 0.5,
+            alpha22: 0.5,
+            ..support::paper_material()
+        },
+        Loads {
+            gravity: [0.0, 0.0, -0.12],
+            distributed: [0.12, 0.0, 0.0],
+            ..Loads::default()
+        },
+        &Constraints {
+            fixed_rings: 1,
+            ..Constraints::default()
+        },
+        DnurbsOptions {
+            weights_as_dofs: true,
+            quadrature_points: Some(4),
+            ..DnurbsOptions::default()
+        },
+    )
+    .unwrap();
+    let steady = model.steady_state_with(SteadySettings::default()).unwrap();
+    let r = max_abs(&residual(&model, &steady.p));
+    let f = max_abs(&residual(&model, model.p0()));
+    assert!(r < 1e-12 * f, "residual {r:e} of {f:e}");
+}
+
 /// Stopped at a loose tolerance (far above round-off), the reported residual is the relative
 /// equilibrium residual `|f − K(p)(p − p_rest)| / (|f| + |K(p)(p − p_rest)|)` on the free dofs
 /// of the shape it returns, recomputed here from matrices assembled at that shape.

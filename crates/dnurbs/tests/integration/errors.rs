@@ -127,6 +127,42 @@ fn non_positive_time_step_is_rejected() {
     }
 }
 
+/// The singular-stiffness error names the first axis along which a rigid translation is
+/// left free: a net held only in x (a linear constraint on x of point 0) is free along y;
+/// held in x and y, along z; held in all three, no translation is free (the paper's material
+/// has bending terms only, so the affine fields still make K singular, reported otherwise).
+#[test]
+fn free_translation_is_named_by_its_axis() {
+    let hold = |axes: &[usize]| Constraints {
+        linear: axes
+            .iter()
+            .map(|&x| LinearConstraint {
+                terms: vec![(x, 1.0)],
+                rhs: [0.0, 0.0, 2.0][x],
+            })
+            .collect(),
+        ..Constraints::default()
+    };
+    let error = |axes: &[usize]| {
+        build(
+            support::paper_material(),
+            Loads::default(),
+            hold(axes),
+            DnurbsOptions::default(),
+        )
+        .unwrap()
+        .steady_state()
+        .unwrap_err()
+        .to_string()
+    };
+    let e = error(&[0]);
+    assert!(e.contains("translation along y"), "{e}");
+    let e = error(&[0, 1]);
+    assert!(e.contains("translation along z"), "{e}");
+    let e = error(&[0, 1, 2]);
+    assert!(!e.contains("translation along"), "{e}");
+}
+
 #[test]
 fn free_floating_steady_state_is_singular() {
     let loads = Loads {

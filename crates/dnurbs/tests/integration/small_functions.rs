@@ -175,6 +175,59 @@ fn constraints_on_fixed_dofs_are_checked_relative_to_their_terms() {
     }
 }
 
+/// The size a fixed-only constraint is measured against is that of its terms `a_i p_i`, not
+/// of its coefficients: a coefficient of 10⁶ on x of point 0, which sits at x = 0, adds
+/// nothing, so with z of point 0 (= 2) the terms are of size 2 + |b| ≈ 4, and a violation of
+/// 10⁻⁶ (2.5·10⁻⁷ of that) is a real conflict with the fixed points; one of 10⁻¹⁵ is round-off.
+#[test]
+fn fixed_only_constraints_are_measured_by_their_terms_not_their_coefficients() {
+    let p0 = support::paper_model(DnurbsOptions::default()).p0().to_vec();
+    assert_eq!((p0[0], p0[2]), (0.0, 2.0));
+    let with_rhs = |rhs: f64| {
+        paper_with(vec![LinearConstraint {
+            terms: vec![(0, 1e6), (2, 1.0)],
+            rhs,
+        }])
+    };
+    assert!(with_rhs(2.0 + 1e-15).is_ok());
+    match with_rhs(2.0 + 1e-6).map(|_| ()) {
+        Err(DnurbsError::InvalidConstraint { detail }) => {
+            assert!(detail.contains("only fixed dofs"), "{detail}")
+        }
+        other => panic!("expected InvalidConstraint, got {other:?}"),
+    }
+}
+
+/// Consistent constraints whose right-hand sides are large and negative (a net placed far from
+/// the origin, as georeferenced coordinates are) are accepted, and the shape they give at
+/// q = 0 satisfies them to round-off relative to |b|, recomputed here. The particular solution
+/// of `0.3 x₁₂ + 0.7 x₁₇ = b`, `0.6 x₁₇ + 0.9 x₂₂ = 0.37 b` carries a residual of about ε|b|
+/// (10⁻⁸ at |b| = 4.5·10⁷), which the consistency check must measure against |b|.
+#[test]
+fn consistent_constraints_with_large_negative_right_hand_sides_are_accepted() {
+    let x = |k: usize| 3 * k;
+    for b in [-4.5e7, -4.5e8] {
+        let rows = vec![
+            LinearConstraint {
+                terms: vec![(x(12), 0.3), (x(17), 0.7)],
+                rhs: b,
+            },
+            LinearConstraint {
+                terms: vec![(x(17), 0.6), (x(22), 0.9)],
+                rhs: 0.37 * b,
+            },
+        ];
+        let model = paper_with(rows).unwrap_or_else(|e| panic!("b = {b}: {e}"));
+        let p = model.full_coordinates(&vec![0.0; model.n_free()]);
+        let r1 = 0.3 * p[x(12)] + 0.7 * p[x(17)] - b;
+        let r2 = 0.6 * p[x(17)] + 0.9 * p[x(22)] - 0.37 * b;
+        assert!(
+            r1.abs().max(r2.abs()) <= tol::SAME * b.abs(),
+            "b = {b}: residuals {r1:e}, {r2:e}"
+        );
+    }
+}
+
 #[test]
 fn inconsistent_linear_constraints_are_refused() {
     let z12 = 3 * 12 + 2;
@@ -325,6 +378,67 @@ fn energies_of_a_rigid_motion_by_hand() {
     assert!(stretched > 0.0);
     let direct = model.elastic_energy(&p);
     assert!((stretched - direct).abs() <= tol::SAME * direct);
+}
+
+/// The load's potential is `−qᵀ f` with `f` the consistent load, so a rigid translation by
+/// `w` of a free flat patch over `[0, 2] × [0, 3]` under gravity g and a distributed load
+/// `f_d` (parameter integration, unit square) changes it by `−w · (μ g + f_d)` (partition of
+/// unity).
+#[test]
+fn external_potential_of_a_rigid_translation_by_hand() {
+    use nurbspring_sim::DynamicModel;
+    let (mu, g, f_d) = (2.0, [0.0, 0.5, -9.81], [0.7, -0.2, 0.4]);
+    let model = DnurbsModel::new(
+        Geometry::Surface(support::flat_patch(2, 3, 2, 2.0, 3.0)),
+        Material {
+            mu,
+            alpha11: 1.0,
+            alpha22: 1.0,
+            ..Material::default()
+        },
+        Loads {
+            gravity: g,
+            distributed: f_d,
+            ..Loads::default()
+        },
+        &Constraints::default(),
+        DnurbsOptions::default(),
+    )
+    .unwrap();
+    let w = [1.0, -2.0, 0.5];
+    let p0 = model.p0().to_vec();
+    let moved: Vec<f64> = p0.iter().enumerate().map(|(d, x)| x + w[d % 3]).collect();
+    let (q0, q1) = (
+        model.reduced_coordinates(&p0),
+        model.reduced_coordinates(&moved),
+    );
+    let change = model.external_potential(0.0, &q1) - model.external_potential(0.0, &q0);
+    let want: f64 = -(0..3).map(|x| w[x] * (mu * g[x] + f_d[x])).sum::<f64>();
+    assert!(
+        (change - want).abs() <= tol::SAME * want.abs(),
+        "{change} vs {want} by hand"
+    );
+}
+
+/// `simulate` with weights as unknowns steps while `t < t_end − Δt/2`, as `run_until`: with
+/// Δt = 0.5 and t_end = 1.25 it stops at t = 1 (2 steps), with t_end = 1.3 it takes a third.
+#[test]
+fn rational_simulate_runs_to_the_nearest_step() {
+    use nurbspring_sim::{IntegratorKind, RunOptions, Sample};
+    let model = support::paper_model(DnurbsOptions {
+        weights_as_dofs: true,
+        ..DnurbsOptions::default()
+    });
+    for (t_end, steps) in [(1.25, 2), (1.3, 3)] {
+        let s = model.initial_state(&[[0.0; 3]], 0.0);
+        let opts = RunOptions::new(0.5, t_end, IntegratorKind::TerzopoulosQin);
+        let mut times = Vec::new();
+        let mut observer = |s: &Sample<'_>| times.push(s.t);
+        let summary = model.simulate(s, &opts, &mut observer).unwrap();
+        assert_eq!(summary.steps, steps, "t_end = {t_end}");
+        assert_eq!(summary.t_final, 0.5 * steps as f64);
+        assert_eq!(times.len(), steps + 1);
+    }
 }
 
 /// `run_until` steps while `t < t_end − Δt/2`: with Δt = 0.5 and t_end = 1.25 it stops at
