@@ -706,7 +706,6 @@ pub fn elevate_degree(
             // Remove the knot ua oldr − 1 times.
             let oldr_u = oldr as usize;
             let den = ub - ua;
-            let bet = (ub - uh[kind - 1]) / den;
             for tr in 1..oldr_u {
                 // `first` and `last` of the book: kind − 2 and kind, widened by one per pass.
                 let (mut i, mut j) = (kind - 1 - tr, kind - 1 + tr);
@@ -717,11 +716,14 @@ pub fn elevate_degree(
                         qw[i] = Row::lerp(alf, &qw[i], &qw[i - 1]);
                     }
                     if j >= lbz {
-                        let coef = if j - tr <= kind - ph + oldr_u {
-                            (ub - uh[j - tr]) / den
-                        } else {
-                            bet
-                        };
+                        // A5.8's right-hand point `(P_j − α_j Q_{j+1}) / (1 − α_j)` with
+                        // `α_j = (ua − U_{j−tr}) / (ub − U_{j−tr})` (the knot `j + ph + 1` is ub).
+                        // `U_{j−tr}` is a knot already loaded into uh (j − tr < kind). The book
+                        // takes `uh[kind − 1]` instead when `j − tr > kind − ph + oldr`, which
+                        // holds only while the previous knot has at least `t + mul − 1` copies:
+                        // after a knot of lower multiplicity (a simple knot, then a triple one,
+                        // at degree ≥ 10 for t = 1) it moved the curve.
+                        let coef = (ub - uh[j - tr]) / den;
                         ebpts[kj] = Row::lerp(coef, &ebpts[kj], &ebpts[kj + 1]);
                     }
                     i += 1;

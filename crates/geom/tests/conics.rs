@@ -45,6 +45,45 @@ fn quarter_circle_points_and_curvature() {
     }
 }
 
+/// `derivatives_batch` on the full circle: one result per parameter, in order (the knots at
+/// quarters interpolate (1, 0), (0, 1), (−1, 0), (0, −1)), every point on the unit circle,
+/// tangent ⟂ radius and curvature 1.
+#[test]
+fn full_circle_derivatives_in_a_batch() {
+    let c = full_circle();
+    let us = linspace(0.0, 1.0, 201);
+    let batch = c.derivatives_batch(&us, 2).unwrap();
+    assert_eq!(batch.len(), us.len());
+    for (k, quarter) in [
+        [1., 0., 0.],
+        [0., 1., 0.],
+        [-1., 0., 0.],
+        [0., -1., 0.],
+        [1., 0., 0.],
+    ]
+    .iter()
+    .enumerate()
+    {
+        assert_close3(
+            batch[50 * k].point,
+            *quarter,
+            CONIC_RADIUS,
+            "c at a quarter",
+        );
+    }
+    for (d, &u) in batch.iter().zip(&us) {
+        let r = d.point[0].hypot(d.point[1]);
+        assert!((r - 1.0).abs() <= CONIC_RADIUS, "radius {r} at u = {u}");
+        let dot = d.point[0] * d.u[0] + d.point[1] * d.u[1];
+        assert!(
+            dot.abs() <= 4.0 * f64::EPSILON * norm(d.u),
+            "c·c' = {dot} at u = {u}"
+        );
+        let kappa = (d.u[0] * d.uu[1] - d.u[1] * d.uu[0]) / norm(d.u).powi(3);
+        assert!((kappa - 1.0).abs() < 1e-14, "curvature {kappa} at u = {u}");
+    }
+}
+
 #[test]
 fn full_circle_nine_points() {
     let c = full_circle();

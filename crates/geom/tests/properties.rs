@@ -289,6 +289,17 @@ proptest! {
                 let n = j.n_dofs();
                 let dp: Vec<f64> = (0..3).map(|x| (0..n).map(|c| dense[x * n + c] * p[c]).sum()).collect();
                 check_close(&dp, &jp, ROUNDOFF, "dense J p")?;
+                // The triplets of the block of a point stacked at rows 5, 6, 7: those rows
+                // only, and summed they are J (so J p = c again).
+                let mut stacked = Vec::new();
+                j.push_triplets(slot, 5, &mut stacked);
+                prop_assert!(!stacked.is_empty() || jp.iter().all(|&x| x == 0.0));
+                let mut tp = [0.0; 3];
+                for &(row, col, value) in &stacked {
+                    prop_assert!((5..8).contains(&row) && col < n, "triplet ({row}, {col})");
+                    tp[row - 5] += value * p[col];
+                }
+                check_scaled(&tp, &d.get(slot), natural[slot.slot()], ROUNDOFF, &format!("triplets of J_{} p", slot.name()))?;
                 // ⟨J p, f⟩ = ⟨p, Jᵀ f⟩.
                 let mut jt = vec![0.0; n];
                 j.apply_transpose_add(slot, f, 1.0, &mut jt);

@@ -128,6 +128,7 @@ fn check_matrix(
     tol: f64,
 ) -> Result<(), TestCaseError> {
     prop_assert_eq!((c.nrows, c.ncols), (new.n_basis(), old.n_basis()));
+    prop_assert_eq!(c.row_sums().len(), c.nrows);
     for (r, s) in c.row_sums().iter().enumerate() {
         prop_assert!((s - 1.0).abs() <= tol, "row {} sums to {}", r, s);
     }
@@ -375,6 +376,29 @@ fn unclamped_refinement() {
     ));
 }
 
+/// A knot vector is clamped at an end only when its p + 1 knots there coincide: clamped at
+/// the start and not at the end (and the reverse), and degree elevation, which needs both,
+/// refuses either.
+#[test]
+fn knot_vectors_clamped_at_one_end_only() {
+    let start = KnotVector::try_new(vec![0., 0., 0., 0., 1., 2., 3., 4.], 3).unwrap();
+    let end = KnotVector::try_new(vec![0., 1., 2., 3., 4., 4., 4., 4.], 3).unwrap();
+    assert_eq!(
+        (start.is_clamped_start(), start.is_clamped_end()),
+        (true, false)
+    );
+    assert_eq!(
+        (end.is_clamped_start(), end.is_clamped_end()),
+        (false, true)
+    );
+    for k in [&start, &end] {
+        assert!(matches!(
+            elevate_degree(k, 1),
+            Err(GeomError::UnsupportedKnots { .. })
+        ));
+    }
+}
+
 #[test]
 fn surface_insertion_errors_and_single_direction() {
     let s = reference_surface(true);
@@ -429,6 +453,60 @@ fn elevating_a_cubic_with_simple_knots_keeps_it() {
     }
 }
 
+/// Degree elevation where a knot's multiplicity jumps by two or more over the previous one (a
+/// simple knot at 0.3, then a triple one at 0.45), at degrees 10 and 11: A5.9's knot removal
+/// at 0.45 then reaches points that depend on the knots loaded before 0.3 (the book's
+/// shortcut, which takes the last loaded knot there, moved the curve by 0.09 at degree 10 and
+/// made a weight negative at degree 12). The same rational curve at 201 parameters.
+#[test]
+fn elevation_across_a_jump_in_knot_multiplicity_keeps_the_curve() {
+    for p in [10, 11] {
+        let interior = [0.15, 0.3, 0.45, 0.45, 0.45, 0.6, 0.8];
+        let mut knots = vec![0.0; p + 1];
+        knots.extend(interior);
+        knots.extend(vec![1.0; p + 1]);
+        let n = knots.len() - p - 1;
+        let k = KnotVector::try_new(knots, p).unwrap();
+        let pts: Vec<[f64; 3]> = (0..n)
+            .map(|i| [i as f64, ((i * 5) % 7) as f64 * 0.3, (i as f64 * 0.9).sin()])
+            .collect();
+        let w: Vec<f64> = (0..n).map(|i| 0.8 + 0.3 * ((i * 3) % 4) as f64).collect();
+        let c = NurbsCurve::try_new(k, pts, w).unwrap();
+        for t in [1, 2] {
+            let (up, _) = c.elevate_degree(t).unwrap();
+            assert_eq!(up.basis().degree(), p + t);
+            for s in 0..=200 {
+                let u = s as f64 / 200.0;
+                assert_close3(
+                    up.point(u).unwrap(),
+                    c.point(u).unwrap(),
+                    ELEVATION,
+                    &format!("degree {p} + {t} at u = {u}"),
+                );
+            }
+        }
+    }
+}
+
+/// `row_sums` of a matrix by hand (not one of this module's, whose rows all sum to 1): one
+/// sum per row, empty rows 0.
+#[test]
+fn row_sums_by_hand() {
+    let c = RefinementMatrix {
+        nrows: 4,
+        ncols: 2,
+        triplets: vec![
+            (0, 0, 2.0),
+            (0, 1, -0.5),
+            (2, 1, 3.0),
+            (3, 0, 0.25),
+            (3, 1, 0.5),
+        ],
+    };
+    assert_eq!(c.row_sums(), vec![1.5, 0.0, 3.0, 0.75]);
+    assert_eq!(RefinementMatrix::identity(3).row_sums(), vec![1.0; 3]);
+}
+
 #[test]
 fn surface_control_points_are_indexed_row_by_row() {
     let k = KnotVector::try_new(vec![0., 0., 0.5, 1., 1.], 1).unwrap();
@@ -444,6 +522,53 @@ fn surface_control_points_are_indexed_row_by_row() {
             assert_eq!(s.control_points()[s.index(i, j)], [i as f64, j as f64, 0.0]);
         }
     }
+}
+
+/// Bézier patches of degree 15 and 16 in u (either side of the stack buffers of point
+/// evaluation) and 1 in v, with the control points of `(u, v, u²)`: the Bernstein coefficients
+/// of u are i/n and of u² are i(i − 1)/(n(n − 1)), so the points are `(u, v, u²)`.
+#[test]
+fn high_degree_bezier_patch_points_by_hand() {
+    for n in [15usize, 16] {
+        let mut ku = vec![0.0; n + 1];
+        ku.extend(vec![1.0; n + 1]);
+        let ku = KnotVector::try_new(ku, n).unwrap();
+        let kv = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+        let nf = n as f64;
+        let pts: Vec<[f64; 3]> = (0..=n)
+            .flat_map(|i| {
+                let f = i as f64;
+                [0.0, 1.0].map(|v| [f / nf, v, f * (f - 1.0) / (nf * (nf - 1.0))])
+            })
+            .collect();
+        let s = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 2 * (n + 1)]).unwrap();
+        for (u, v) in [(0.0, 0.0), (0.3, 0.25), (0.5, 1.0), (0.77, 0.6), (1.0, 0.5)] {
+            assert_close3(
+                s.point(u, v).unwrap(),
+                [u, v, u * u],
+                ROUNDOFF,
+                &format!("degree {n} at ({u}, {v})"),
+            );
+        }
+    }
+}
+
+/// The test for a degenerate normal is relative to `|c_u| |c_v|`: a plane patch of side 10⁻⁷
+/// (`|c_u × c_v|` = 10⁻¹⁴) has the normal (0, 0, 1); the pole of the sphere octant (u = 1,
+/// where the meridians meet and `c_v = 0`) has none.
+#[test]
+fn a_small_patch_has_a_normal_and_a_pole_has_none() {
+    let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+    let h = 1e-7;
+    let pts = vec![[0.0, 0.0, 0.0], [0.0, h, 0.0], [h, 0.0, 0.0], [h, h, 0.0]];
+    let s = NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 4]).unwrap();
+    assert_eq!(s.normal(0.5, 0.5).unwrap(), [0.0, 0.0, 1.0]);
+    let octant = sphere_octant();
+    let ((_, u1), _) = octant.domain();
+    assert!(matches!(
+        octant.normal(u1, 0.5),
+        Err(GeomError::DegenerateNormal { .. })
+    ));
 }
 
 /// `uniform_grid` on a bilinear patch over `[1, 3] × [0, 2]`: parameters evenly spaced with
