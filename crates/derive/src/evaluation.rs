@@ -678,7 +678,7 @@ mod tests {
     }
 
     /// Each warning exactly when its number crosses its threshold: the free mass ratio
-    /// `free_msm / free_dnurbs` outside [1/2, 2] (2.5 warns, 1.5 does not), a selected mass at
+    /// `free_msm / free_dnurbs` outside [1/2, 2] (2.5 and 0.45 warn, 1.5 and 0.75 do not), a selected mass at
     /// either edge of the paper's scan (not inside it), a class clamped to zero (paper only).
     #[test]
     fn warnings_against_their_thresholds() {
@@ -701,6 +701,7 @@ mod tests {
             warnings(method, &quiet, &quiet, &rows, mass, clamped)
         };
         assert!(warn(Method::Modal, &masses(3.0, 2.0, 2.0), &[]).is_empty());
+        assert!(warn(Method::Modal, &masses(1.5, 2.0, 2.0), &[]).is_empty());
         let w = warn(Method::Modal, &masses(5.0, 2.0, 2.0), &[]);
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(w[0].contains("(2.500×)"), "{w:?}");
