@@ -28,6 +28,7 @@ export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-target/mutants}
 status=0
 for p in "${packages[@]}"; do
     out="mutants.out/$p${RETEST:+-retest}"
+    mkdir -p mutants.out
     args=(--package "nurbspring-$p" --jobs "$JOBS" --output "$out" --no-shuffle)
     if [ "$p" = io ]; then
         args+=(--file crates/io/src/atomic.rs)

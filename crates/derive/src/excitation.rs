@@ -252,21 +252,12 @@ pub fn excitation_fit(
     )?;
     let dt_modal = 2.0 / highest_frequency(&l_modal, &modal.masses);
     let dt_here = 2.0 / highest_frequency(&l, &masses);
-    let mut warnings = Vec::new();
-    for (&c, &kc) in active.iter().zip(&k) {
-        let k0 = modal.constants.value(classes[c]);
-        if kc > CONSTANT_RANGE * k0 || kc < k0 / CONSTANT_RANGE {
-            warnings.push(format!(
-                "the excitation fit moved {} to {kc:.4e}, more than {CONSTANT_RANGE:e}× from the modal fit's {k0:.4e}",
-                classes[c].symbol()
-            ));
-        }
-    }
-    if dt_here < dt_modal / STEP_SHRINK {
-        warnings.push(format!(
-            "the excitation fit's explicit step limit {dt_here:.4e} s is more than {STEP_SHRINK}× smaller than the modal fit's {dt_modal:.4e} s"
-        ));
-    }
+    let warnings = overfit_warnings(
+        &active.iter().map(|&c| classes[c]).collect::<Vec<_>>(),
+        &k,
+        &modal.constants,
+        (dt_modal, dt_here),
+    );
     Ok(ExcitationSolution {
         report: ExcitationReport {
             classes: active.iter().map(|&c| classes[c]).collect(),
@@ -287,6 +278,33 @@ pub fn excitation_fit(
     })
 }
 
+/// The signs of over-fitting: a refined constant `k` of `classes` more than [`CONSTANT_RANGE`]
+/// either way from the modal fit's, an explicit step limit `dt.1` more than [`STEP_SHRINK`]
+/// times smaller than the modal fit's `dt.0`.
+fn overfit_warnings(
+    classes: &[Class],
+    k: &[f64],
+    modal: &Constants,
+    (dt_modal, dt_here): (f64, f64),
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for (&class, &kc) in classes.iter().zip(k) {
+        let k0 = modal.value(class);
+        if kc > CONSTANT_RANGE * k0 || kc < k0 / CONSTANT_RANGE {
+            warnings.push(format!(
+                "the excitation fit moved {} to {kc:.4e}, more than {CONSTANT_RANGE:e}× from the modal fit's {k0:.4e}",
+                class.symbol()
+            ));
+        }
+    }
+    if dt_here < dt_modal / STEP_SHRINK {
+        warnings.push(format!(
+            "the excitation fit's explicit step limit {dt_here:.4e} s is more than {STEP_SHRINK}× smaller than the modal fit's {dt_modal:.4e} s"
+        ));
+    }
+    warnings
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -299,6 +317,36 @@ fn norm(a: &[f64]) -> f64 {
 mod tests {
     use super::*;
     use crate::modal::tests::chain;
+    use nurbspring_msm::{LinearKind, Region};
+
+    /// A warning for each constant beyond 10³ of the modal fit's, up or down, none within;
+    /// one for a step limit more than ten times smaller, none for five times.
+    #[test]
+    fn overfit_warnings_against_their_thresholds() {
+        let classes = [
+            Class::Linear(LinearKind::SpringU, Region::Interior),
+            Class::Linear(LinearKind::SpringV, Region::Interior),
+            Class::Linear(LinearKind::BendU, Region::Interior),
+        ];
+        let modal = Constants::from_pairs(classes.iter().map(|&c| (c, 2.0)));
+        let w = overfit_warnings(&classes, &[2.5e3, 1e-3, 1.5e3], &modal, (1.0, 0.2));
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(
+            w[0].starts_with("the excitation fit moved spring_u@interior to 2.5000e3"),
+            "{w:?}"
+        );
+        assert!(
+            w[1].starts_with("the excitation fit moved spring_v@interior to 1.0000e-3"),
+            "{w:?}"
+        );
+        assert!(overfit_warnings(&classes, &[1.9e3, 3e-3, 2.0], &modal, (1.0, 0.2)).is_empty());
+        let w = overfit_warnings(&classes, &[2.0; 3], &modal, (1.0, 0.05));
+        assert_eq!(w.len(), 1);
+        assert!(
+            w[0].starts_with("the excitation fit's explicit step limit 5.0000e-2 s"),
+            "{w:?}"
+        );
+    }
 
     /// The fixed-fixed chain's frequencies `2 √(k/m) sin(jπ / (2(n + 1)))`, the lowest few
     /// and the highest, at stiffness scales from 1e-10 to 1e10.

@@ -17,7 +17,7 @@ use crate::DeriveError;
 use crate::beyond::{Beyond, beyond};
 use crate::fit::FitDofs;
 use crate::fit::FitResult;
-use crate::outcome::Derivation;
+use crate::outcome::{Derivation, MassReport};
 use crate::pipeline::derive_msm;
 use crate::setup::{Config, Setup};
 use crate::validation::{compare, dominant_period};
@@ -651,11 +651,11 @@ fn constant_verdict(
     }
 }
 
-fn mass_verdict(main: &Derivation, nearest: &[NearestEigenvalue]) -> VerdictLine {
+fn mass_verdict(mass: &MassReport, nearest: &[NearestEigenvalue]) -> VerdictLine {
     let best = nearest
         .iter()
         .min_by(|a, b| a.relative_difference.total_cmp(&b.relative_difference));
-    let scan_selected = main.mass.selected;
+    let scan_selected = mass.selected;
     let (verdict, why) = match best {
         Some(b) if b.relative_difference < MASS_MATCH => {
             let selected_too = (scan_selected - PAPER_M).abs() / PAPER_M < MASS_MATCH;
@@ -701,8 +701,7 @@ fn mass_verdict(main: &Derivation, nearest: &[NearestEigenvalue]) -> VerdictLine
         paper: "0.005".to_string(),
         obtained: format!(
             "smallest eigenvalues {}; scan selects {:.6}",
-            main.mass
-                .eigenvalues
+            mass.eigenvalues
                 .iter()
                 .take(4)
                 .map(|v| format!("{v:.5}"))
@@ -910,7 +909,7 @@ fn verdicts(
             facts,
         ),
         constant_verdict(PAPER_K_DIAG, Class::Spring(SpringKind::Shear), fits, facts),
-        mass_verdict(main, nearest),
+        mass_verdict(&main.mass, nearest),
     ];
     out.extend(explicit_verdict(base, dynamics));
     for parameters in [Parameters::Paper, Parameters::Derived] {
@@ -1301,5 +1300,51 @@ mod tests {
         assert_eq!(line.verdict, Verdict::Reproduced);
         assert_eq!(line.why, "Δt is below the explicit stability limit");
         assert!(explicit_verdict(&base, &runs(2.0 * dt, None)[..3]).is_none());
+    }
+
+    /// The mass verdict: reproduced when an eigenvalue of M is within MASS_MATCH of 0.005 and
+    /// the scan selects a mass that close too, partly when only the eigenvalue is, not
+    /// otherwise; the closest of the listings is the one reported.
+    #[test]
+    fn the_mass_verdict_reads_the_nearest_eigenvalue_and_the_scan() {
+        let near = |matrix, value: f64| NearestEigenvalue {
+            matrix,
+            value,
+            rank: 2,
+            count: 9,
+            relative_difference: (value - PAPER_M).abs() / PAPER_M,
+        };
+        let mass = |selected: f64| MassReport {
+            selected,
+            eigenvalues: vec![0.001, 0.0052, 0.02],
+            ..MassReport::default()
+        };
+        let nearest = [
+            near(MassMatrix::AllDofs, 0.0052),
+            near(MassMatrix::FreeDofs, 0.009),
+        ];
+        let line = mass_verdict(&mass(0.0051), &nearest);
+        assert_eq!(line.verdict, Verdict::Reproduced, "{}", line.why);
+        assert!(
+            line.why.contains("4.0% from 0.005; the scan selects it"),
+            "{}",
+            line.why
+        );
+        let line = mass_verdict(&mass(0.02), &nearest);
+        assert_eq!(line.verdict, Verdict::Partly);
+        assert!(
+            line.why
+                .contains("the scan does not select it (it selects m = 0.020000)"),
+            "{}",
+            line.why
+        );
+        let far = [near(MassMatrix::FreeDofs, 0.009)];
+        let line = mass_verdict(&mass(0.005), &far);
+        assert_eq!(line.verdict, Verdict::NotReproduced);
+        assert!(line.why.contains("the nearest is 0.009000"), "{}", line.why);
+        assert_eq!(
+            mass_verdict(&mass(0.005), &[]).verdict,
+            Verdict::NotReproduced
+        );
     }
 }
