@@ -541,6 +541,99 @@ mod tests {
         }
     }
 
+    /// The impulse's target is at 0.3 (and 0.35) of the domain, whatever the domain: on
+    /// [2, 10] (× [−3, 1]) with 12 spans the free point moved is the one whose Greville point is
+    /// nearest (4.4, −1.6), for a surface and for a curve.
+    #[test]
+    fn the_impulse_target_is_a_fraction_of_any_domain() {
+        let knots = |a: f64, b: f64| {
+            let mut k = vec![a; 3];
+            k.extend((1..12).map(|i| a + (b - a) * i as f64 / 12.0));
+            k.extend([b; 3]);
+            KnotVector::try_new(k, 2).unwrap()
+        };
+        let (ku, kv) = (knots(2.0, 10.0), knots(-3.0, 1.0));
+        let (gu, gv) = (ku.greville(), kv.greville());
+        let n = gu.len();
+        let nearest = |g: &[f64], x: f64| {
+            (1..n - 1)
+                .min_by(|&a, &b| (g[a] - x).abs().total_cmp(&(g[b] - x).abs()))
+                .unwrap()
+        };
+        let (i, j) = (nearest(&gu, 4.4), nearest(&gv, -1.6));
+        let pts = gu
+            .iter()
+            .flat_map(|&u| gv.iter().map(move |&v| [u, v, 0.05 * u * v]))
+            .collect();
+        let s = NurbsSurface::try_new(ku.clone(), kv, pts, vec![1.0; n * n]).unwrap();
+        let surface = setup(Geometry::Surface(s.clone()));
+        let moved: Vec<usize> = point_velocities(&surface, &impulse(&surface, 1.0).unwrap())
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v != [0.0; 3])
+            .map(|(a, _)| a)
+            .collect();
+        assert_eq!(moved, vec![s.index(i, j)]);
+        let pts: Vec<[f64; 3]> = gu.iter().map(|&u| [u, 0.1 * u * u, 0.0]).collect();
+        let c = NurbsCurve::try_new(ku, pts, vec![1.0; n]).unwrap();
+        let curve = setup(Geometry::Curve(c));
+        let moved: Vec<usize> = point_velocities(&curve, &impulse(&curve, 1.0).unwrap())
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v != [0.0; 3])
+            .map(|(a, _)| a)
+            .collect();
+        assert_eq!(moved, vec![i]);
+    }
+
+    /// The non-zeros of a row of a CSC matrix, by hand; stored zeros are left out.
+    #[test]
+    fn rows_of_a_sparse_matrix_by_hand() {
+        let a = SparseMatrix::from_triplets(
+            3,
+            4,
+            &[
+                (0, 1, 2.0),
+                (1, 0, -1.0),
+                (1, 3, 4.0),
+                (2, 2, 0.0),
+                (1, 2, 0.5),
+            ],
+        )
+        .unwrap();
+        assert_eq!(row(&a, 0), vec![(1, 2.0)]);
+        assert_eq!(row(&a, 1), vec![(0, -1.0), (2, 0.5), (3, 4.0)]);
+        assert!(row(&a, 2).is_empty());
+    }
+
+    /// With no point fixed the D-NURBS has rigid modes (ω = 0); the lowest non-zero frequency
+    /// is the first positive one, not a zero.
+    #[test]
+    fn omega1_skips_the_rigid_modes() {
+        let ku = KnotVector::clamped_uniform(2, 2).unwrap();
+        let g = ku.greville();
+        let pts = g
+            .iter()
+            .flat_map(|&u| g.iter().map(move |&v| [u, v, 0.1 * u * v]))
+            .collect();
+        let s = NurbsSurface::try_new(ku.clone(), ku, pts, vec![1.0; 16]).unwrap();
+        let mut config = crate::test_scenes::config(Geometry::Surface(s));
+        config.constraints.fixed_rings = 0;
+        let setup = Setup::new(&config).unwrap();
+        let modes = DnurbsModes::new(&setup, "test").unwrap();
+        let zeros = modes.basis.omega.iter().filter(|&&w| w == 0.0).count();
+        assert!(zeros >= 1, "{:?}", modes.basis.omega);
+        let first = modes
+            .basis
+            .omega
+            .iter()
+            .copied()
+            .find(|&w| w > 0.0)
+            .unwrap();
+        assert_eq!(modes.omega1(), first);
+        assert!(first > 0.0);
+    }
+
     /// The second excitation's system keeps M and K and replaces the state: no load, the
     /// given displacement and velocity, and the energy origin of no load.
     #[test]
