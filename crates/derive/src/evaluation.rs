@@ -539,6 +539,28 @@ mod tests {
                 velocities[point]
             );
         }
+
+        // A curve nearly along z (|t_z| > 0.9): across it is the y axis made orthogonal to
+        // the tangent, `y − (y·t) t`.
+        let k = KnotVector::clamped_uniform(2, 4).unwrap();
+        let pts: Vec<[f64; 3]> = g
+            .iter()
+            .map(|&u| [0.1 * u, 0.3 * u + 0.2 * u * u, 3.0 * u])
+            .collect();
+        let c = NurbsCurve::try_new(k, pts, vec![1.0; n]).unwrap();
+        let steep_setup = setup(Geometry::Curve(c.clone()));
+        let (a, b) = (c.point(u + h).unwrap(), c.point(u - h).unwrap());
+        let t = unit([0, 1, 2].map(|x| a[x] - b[x]));
+        assert!(t[2] > 0.9 && t[0] != 0.0 && t[1] != 0.0, "{t:?}");
+        let expected = unit([-t[1] * t[0], 1.0 - t[1] * t[1], -t[1] * t[2]]);
+        let velocities = point_velocities(&steep_setup, &impulse(&steep_setup, 1.0).unwrap());
+        for x in 0..3 {
+            assert!(
+                (velocities[point][x] - expected[x]).abs() < 1e-8,
+                "{:?} vs {expected:?}",
+                velocities[point]
+            );
+        }
     }
 
     /// The impulse's target is at 0.3 (and 0.35) of the domain, whatever the domain: on
