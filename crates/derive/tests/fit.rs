@@ -209,6 +209,27 @@ fn dependent_classes_are_named() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("bend"), "{err}");
+    // A class that contributes nothing beside one that does: named alone, without a
+    // dependence judged on a Gram matrix that has a zero row.
+    let g = SparseMatrix::identity(3);
+    let err = StiffnessFit::new(
+        &k_d,
+        &omega,
+        &[
+            (Class::Spring(SpringKind::Structural), g),
+            (Class::Spring(SpringKind::Bend), SparseMatrix::zeros(3, 3)),
+        ],
+        10,
+        None,
+    )
+    .unwrap_err();
+    match err {
+        DeriveError::SingularFit { detail } => assert_eq!(
+            detail,
+            "bend elements contribute nothing on the selected dofs (Ωᵀ G Ω = 0)"
+        ),
+        other => panic!("unexpected {other}"),
+    }
 }
 
 /// Identifiability does not depend on the size of the classes' matrices: two independent
@@ -634,4 +655,68 @@ fn the_projected_trust_region_shrinks_when_the_projection_climbs() {
         tr.iterations
     );
     assert_kkt(&fit, &tr.k, 1e-10, "valley");
+}
+
+/// Scaling the whole problem (`K_D` and every unit matrix by s) leaves the constants: the
+/// `k ≥ 0` trust region from the bound reaches the same optimum at s = 10⁻⁶ and 10⁶ (its ratio
+/// of actual to predicted decrease does not depend on the scale).
+#[test]
+fn the_trust_region_does_not_depend_on_the_problems_scale() {
+    let classes = Class::linear(&nurbspring_msm::LinearKind::ALL);
+    for (case, fit) in random_fits().iter().enumerate().take(10) {
+        let k = fit.solve(true).unwrap();
+        for scale in [1e-6, 1e6] {
+            let unit: Vec<(Class, SparseMatrix)> = (0..4)
+                .map(|c| {
+                    let mut h = fit.h(c).clone();
+                    h.scale(scale);
+                    (classes[c], h)
+                })
+                .collect();
+            // K_D: the target's part in the span of the classes, Σ k*_c H_c with k* the
+            // unconstrained solution (the part outside the span moves no optimum); Ω is the
+            // identity, so H_c = G_c.
+            let free = fit.solve(false).unwrap();
+            let mut k_d = SparseMatrix::zeros(6, 6);
+            for (c, (_, h)) in unit.iter().enumerate() {
+                k_d = SparseMatrix::linear_combination(1.0, &k_d, free[c], h).unwrap();
+            }
+            let scaled =
+                StiffnessFit::new(&k_d, &SparseMatrix::identity(6), &unit, 100, None).unwrap();
+            let tr = scaled.trust_region(&[0.0; 4], true, 60).unwrap();
+            let size = k.iter().map(|x| x.abs()).fold(1.0, f64::max);
+            for c in 0..4 {
+                assert!(
+                    (tr.k[c] - k[c]).abs() < 1e-7 * size,
+                    "case {case}, scale {scale}: {:?} vs {k:?}",
+                    tr.k
+                );
+            }
+        }
+    }
+}
+
+/// The spectral-norm fit improves on the Frobenius solution it starts from when the two
+/// norms disagree (random problems whose target is not in the span of the classes): a lower
+/// spectral residual, and no step of 10⁻³ of the largest constant along a class lowers it
+/// further by more than a part in 10⁴ (a minimum of a convex function, up to Nelder–Mead's
+/// accuracy on a non-smooth one).
+#[test]
+fn the_spectral_fit_improves_on_the_frobenius_start() {
+    for (case, fit) in random_fits().iter().enumerate().take(5) {
+        let start = fit.solve(false).unwrap();
+        let r0 = fit.relative_spectral_residual(&start).unwrap();
+        let (k, r) = fit.solve_spectral().unwrap();
+        assert_eq!(r, fit.relative_spectral_residual(&k).unwrap());
+        assert!(r < r0 * (1.0 - 1e-4), "case {case}: {r} vs {r0}");
+        let step = 1e-3 * k.iter().map(|x| x.abs()).fold(0.0, f64::max);
+        for c in 0..k.len() {
+            for sign in [-1.0, 1.0] {
+                let mut probe = k.clone();
+                probe[c] += sign * step;
+                let rp = fit.relative_spectral_residual(&probe).unwrap();
+                assert!(rp > r * (1.0 - 1e-4), "case {case}, class {c}: {rp} < {r}");
+            }
+        }
+    }
 }
