@@ -623,6 +623,28 @@ mod tests {
         );
     }
 
+    /// Nelder–Mead keeps to its budget of evaluations: at most `max_evals + n + 1` (the last
+    /// iteration starts one short of the budget and may spend a reflection, a contraction and a
+    /// shrink of n points), counted on Rosenbrock's function, which it cannot finish in 50.
+    #[test]
+    fn nelder_mead_keeps_to_its_budget() {
+        let count = std::cell::Cell::new(0usize);
+        let rosenbrock = |x: &[f64]| {
+            count.set(count.get() + 1);
+            (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2)
+        };
+        for budget in [20, 50] {
+            count.set(0);
+            let (_, fx) = nelder_mead(&rosenbrock, &[-1.2, 1.0], 0.5, budget);
+            assert!(fx > 1e-6, "{fx}");
+            assert!(
+                count.get() <= budget + 3,
+                "{} evaluations for {budget}",
+                count.get()
+            );
+        }
+    }
+
     fn matrix(rows: [[f64; 2]; 2]) -> DenseMatrix {
         DenseMatrix::from_fn(2, 2, |i, j| rows[i][j])
     }
