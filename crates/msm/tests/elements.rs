@@ -280,12 +280,12 @@ fn chain_lattice_on_a_curve() {
 }
 
 /// On a flat sheet with uneven knots (nodes at u ∈ {0, 0.1, 0.4, 1}, v ∈ {0, 0.25, 1}), the
-/// displacement `(f/2, 0, f)`, `f = u² + 3v² + 5uv`, has the difference quotients of each element
+/// displacement `(f/2, −f/4, f)`, `f = u² + 3v² + 5uv`, has the difference quotients of each element
 /// kind exactly: `f_uu = 2`, `f_vv = 6`, `f_uv = 5` for the three-point and four-point
 /// stencils (exact for quadratics at any spacing), and the plain difference `f_b − f_a` for
 /// springs. Each element's weight is its share of the domain by hand (dual spacings
 /// τ_u = (0.05, 0.2, 0.45, 0.3), τ_v = (0.125, 0.5, 0.375)), and its energy `½ k w |s|²`
-/// with `|s|² = 1.25 s_z²`.
+/// with `|s|² = (1/4 + 1/16 + 1) s_z²`.
 #[test]
 fn stencils_on_uneven_spacing_are_exact_for_quadratics() {
     let ku = KnotVector::try_new(vec![0., 0., 0.1, 0.4, 1., 1.], 1).unwrap();
@@ -309,8 +309,10 @@ fn stencils_on_uneven_spacing_are_exact_for_quadratics() {
     let params = l.params.clone().unwrap();
     let mut disp = vec![0.0; 3 * l.n_nodes()];
     for (a, &(u, v)) in params.iter().enumerate() {
-        // Out of the plane, and half as much along x: every component of a strain is seen.
+        // Out of the plane, half as much along x and a quarter against y (powers of two, so
+        // the components' ratios are exact): every component of a strain is seen.
         disp[3 * a] = 0.5 * f(u, v);
+        disp[3 * a + 1] = -0.25 * f(u, v);
         disp[3 * a + 2] = f(u, v);
     }
     let (tau_u, tau_v) = ([0.05, 0.2, 0.45, 0.3], [0.125, 0.5, 0.375]);
@@ -340,7 +342,7 @@ fn stencils_on_uneven_spacing_are_exact_for_quadratics() {
         };
         counts[LinearKind::ALL.iter().position(|&k| k == e.kind).unwrap()] += 1;
         let s = e.strain(&disp);
-        assert_eq!((s[0], s[1]), (0.5 * s[2], 0.0));
+        assert_eq!((s[0], s[1]), (0.5 * s[2], -0.25 * s[2]));
         let scale = expected_strain.abs().max(1.0);
         assert!(
             (s[2] - expected_strain).abs() <= 1e-13 * scale,
@@ -354,7 +356,7 @@ fn stencils_on_uneven_spacing_are_exact_for_quadratics() {
             e.kind,
             e.weight
         );
-        let energy = 0.5 * e.k * expected_weight * 1.25 * expected_strain * expected_strain;
+        let energy = 0.5 * e.k * expected_weight * 1.3125 * expected_strain * expected_strain;
         assert!((e.energy(&disp) - energy).abs() <= 1e-12 * energy.max(1e-12));
     }
     // spring_u 3·3, spring_v 4·2, diagonal 2·3·2, bend_u 2·3, bend_v 4·1, twist 3·2.
