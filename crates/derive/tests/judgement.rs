@@ -774,6 +774,12 @@ fn the_modal_derivation_carries_gravity() {
     let v = &d.derived.validation;
     assert!(v.dnurbs_amplitude > 0.0);
     assert!(v.relative_rms < WARN_RELATIVE_RMS, "{}", v.relative_rms);
+    // Gravity is carried by the masses: no other load is left to carry to the nodes.
+    assert!(
+        !d.warnings.iter().any(|w| w.contains("not carried")),
+        "{:?}",
+        d.warnings
+    );
 }
 
 /// The reduction is exact when the free nodes are as many as the free control points (the
