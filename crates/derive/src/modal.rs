@@ -402,6 +402,14 @@ pub(crate) mod tests {
         SparseMatrix::from_triplets(n, n, &t).unwrap()
     }
 
+    /// Without stiffness the lowest frequency is 0 (no shift of 0 is tried on a zero matrix).
+    #[test]
+    fn no_stiffness_has_a_zero_lowest_frequency() {
+        let l =
+            SparseMatrix::from_triplets(3, 3, &[(0, 0, 0.0), (1, 1, 0.0), (2, 2, 0.0)]).unwrap();
+        assert_eq!(lowest_frequency(&l, &[1.0, 2.0, 3.0]).unwrap(), 0.0);
+    }
+
     /// The fixed-fixed chain's lowest frequency `2 √(k/m) sin(π / (2(n + 1)))` at stiffness
     /// scales from 1e-10 to 1e10: the shift of the shift-invert solve must follow the scale of
     /// `L` (a fixed shift of −1 cannot resolve eigenvalues of 1e-10 against 1). The chain is

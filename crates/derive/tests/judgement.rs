@@ -382,6 +382,25 @@ fn the_modal_derivation_reports_its_own_numbers() {
     check_judgement(&d, &setup, &config);
     // The modal fit calibrates the lowest frequency.
     assert!(d.frequencies[0].relative_difference.abs() < 1e-8);
+    // It fits the classes with an element acting on a free node, no other.
+    let lattice = d.lattice.as_ref().unwrap();
+    let acting: Vec<Class> = Class::linear(&LinearKind::ALL)
+        .into_iter()
+        .filter(|&c| {
+            lattice.elements.iter().any(|e| {
+                Class::Linear(e.kind, e.region) == c
+                    && e.weight > 0.0
+                    && e.nodes
+                        .iter()
+                        .zip(&e.coefficients)
+                        .any(|(&a, &coefficient)| !lattice.fixed[a] && coefficient != 0.0)
+            })
+        })
+        .collect();
+    let nurbspring_derive::FitDetail::Modal(report) = &d.fit else {
+        panic!("a modal report expected");
+    };
+    assert_eq!(report.classes, acting);
 }
 
 /// The paper's rule on the same sheet: a lattice far too light, so the mass warning must be
@@ -902,6 +921,18 @@ fn a_reduction_whose_nodes_do_not_determine_the_surface_is_refused() {
         text.contains("msm.grid") && text.contains("the reduction is singular"),
         "{text}"
     );
+    // The nodes named carry the null combination: at least two of them (no single node's
+    // row of Ω is zero), all free.
+    let named: Vec<usize> = text[text.find("nodes [").unwrap() + 7..]
+        .split(']')
+        .next()
+        .unwrap()
+        .split(", ")
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let setup = nurbspring_derive::Setup::new(&config).unwrap();
+    assert!(named.len() >= 2, "{text}");
+    assert!(named.iter().all(|&a| !setup.lattice().fixed[a]), "{text}");
 }
 
 /// The reduction's judgement of singularity is relative: a stiffer material (every stiffness

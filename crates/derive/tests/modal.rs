@@ -98,8 +98,9 @@ fn modal_response_of_a_rigid_mode_and_an_oscillator() {
     let m = SparseMatrix::identity(2);
     let basis = nurbspring_derive::ModalBasis::new(&k, &m).unwrap();
     let times = [0.0, 0.5, 1.25];
-    let u0 = [[0.1, 0.0, -0.2], [0.3, 0.0, 0.0]];
-    let v0 = [[1.0, 0.5, 0.0], [0.0, -0.4, 0.0]];
+    // The oscillator both displaced and moving along x (its velocity mixes the two).
+    let u0 = [[0.1, 0.0, -0.2], [0.3, 0.0, 0.1]];
+    let v0 = [[1.0, 0.5, 0.0], [0.2, -0.4, 0.0]];
     let f = [[0.0, 0.0, -2.0], [0.0; 3]];
     let watch = vec![vec![(0, 1.0)], vec![(1, 1.0)]];
     let origin = nurbspring_derive::EnergyOrigin {
