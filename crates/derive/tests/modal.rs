@@ -80,6 +80,45 @@ fn recovers_a_synthetic_lattice() {
         assert!((a - b).abs() <= RECOVERY * b, "{a} vs {b}");
     }
     assert!(sol.report.relative_residual < RECOVERY);
+
+    // Frequencies no lattice of these classes has: the reported residual of the
+    // eigen-equations, `√(Σ_modes Σ_nodes (L φ/ω² − m φ)² / Σ (m φ)²)` at the fitted constants
+    // and the masses before the calibration (the reported masses / mass_scale), recomputed.
+    let detuned: Vec<SampledMode> = modes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| SampledMode {
+            omega: m.omega * (1.0 + 0.05 * i as f64),
+            shape: m.shape.clone(),
+        })
+        .collect();
+    let sol = modal_fit(&classes, &units, &detuned, &masses).unwrap();
+    let mut l = SparseMatrix::zeros(free.len(), free.len());
+    for (c, u) in classes.iter().zip(&units) {
+        l = SparseMatrix::linear_combination(1.0, &l, sol.constants.value(*c), u).unwrap();
+    }
+    let before: Vec<f64> = sol
+        .masses
+        .iter()
+        .map(|m| m / sol.report.mass_scale)
+        .collect();
+    let (mut num, mut den) = (0.0, 0.0);
+    for m in &detuned {
+        let mut lp = vec![0.0; free.len()];
+        l.mul_vec(&m.shape, &mut lp);
+        for node in 0..free.len() {
+            let target = m.shape[node] * before[node];
+            num += (lp[node] / (m.omega * m.omega) - target).powi(2);
+            den += target * target;
+        }
+    }
+    let residual = (num / den).sqrt();
+    assert!(residual > 1e-3, "{residual}");
+    assert!(
+        (sol.report.relative_residual - residual).abs() < 1e-9 * residual,
+        "{} vs {residual}",
+        sol.report.relative_residual
+    );
 }
 
 /// The MAC is scale- and sign-free and 0 for orthogonal shapes.
