@@ -1191,12 +1191,8 @@ mod tests {
         assert_eq!(
             line.why,
             format!(
-                "no drift (below {NO_DRIFT:e}) on: {} net with p_rest = p(0), {} net with p_rest = p(0); \
-                 drift on: {} net with p_rest = 0, {} net with p_rest = 0",
-                p.name(),
-                g.name(),
-                p.name(),
-                g.name()
+                "no drift (below {NO_DRIFT:e}) on: printed net with p_rest = p(0), greville net with \
+                 p_rest = p(0); drift on: printed net with p_rest = 0, greville net with p_rest = 0"
             )
         );
         let held = [at(p, i, 0.0), at(p, z, 0.0), at(g, i, 0.0), at(g, z, 0.0)];
