@@ -151,7 +151,7 @@ mod tests {
     use super::*;
 
     /// Every third step of a D-NURBS run and of an MSM run is kept (steps 0, 3, 6, 9 of ten),
-    /// with its probe point.
+    /// with its probe points (two on the D-NURBS, each starting at its surface point).
     #[test]
     fn every_nth_sample_is_kept() {
         let ku = KnotVector::clamped_uniform(3, 2).unwrap();
@@ -168,7 +168,12 @@ mod tests {
         let same = |t: &[f64]| {
             t.len() == expected.len() && t.iter().zip(&expected).all(|(a, b)| (a - b).abs() < 1e-12)
         };
-        let omega = Omega::new(&Geometry::Surface(s.clone()), &[(0.5, 0.5)], false).unwrap();
+        let omega = Omega::new(
+            &Geometry::Surface(s.clone()),
+            &[(0.5, 0.5), (0.25, 0.75)],
+            false,
+        )
+        .unwrap();
         let (traj, outcome) = record(
             Watched::Dnurbs {
                 model: setup.model(),
@@ -181,8 +186,17 @@ mod tests {
         );
         outcome.unwrap();
         assert!(same(&traj.t), "{:?}", traj.t);
+        assert_eq!(traj.probes.len(), 2);
         assert_eq!(traj.probes[0].len(), 4);
-        assert_eq!(traj.probes[0][0], s.point(0.5, 0.5).unwrap());
+        assert_eq!(traj.probes[1].len(), 4);
+        for (probe, (u, v)) in traj.probes.iter().zip([(0.5, 0.5), (0.25, 0.75)]) {
+            let p = s.point(u, v).unwrap();
+            assert!(
+                (0..3).all(|x| (probe[0][x] - p[x]).abs() < 1e-14),
+                "{:?} vs {p:?}",
+                probe[0]
+            );
+        }
         let model = MsmModel::new(setup.lattice().clone()).unwrap();
         let initial = model.initial_state(&[]);
         let (traj, outcome) = record(
@@ -197,5 +211,18 @@ mod tests {
         );
         outcome.unwrap();
         assert!(same(&traj.t), "{:?}", traj.t);
+    }
+
+    /// A run that diverges, is unstable or whose Newton iteration fails ends the validation
+    /// early; any other error ends the derivation.
+    #[test]
+    fn which_errors_stop_a_run() {
+        let diverged = SimError::Diverged {
+            step: 3,
+            time: 0.3,
+            reason: "test".into(),
+        };
+        assert!(is_stop(&DeriveError::Sim(diverged)));
+        assert!(!is_stop(&DeriveError::LatticeWithoutParameters));
     }
 }

@@ -227,4 +227,49 @@ mod tests {
         let origin = EnergyOrigin::of_load(&sys.energy.force, &u);
         assert_eq!((origin.elastic, origin.external), (0.0, -6.0 - 1.0));
     }
+
+    /// A stiff sheet (α = 10⁴) far from the origin (x ≈ 10³), at rest in its own rest shape and
+    /// unloaded: `f_int(q₀)` is round-off of size ε |K| |q₀|, which is no load: every load of
+    /// the scalar system is exactly zero, at every such scale.
+    #[test]
+    fn round_off_at_the_rest_shape_is_no_load() {
+        use nurbspring_dnurbs::{Geometry, Material};
+        use nurbspring_geom::{KnotVector, NurbsSurface};
+        let ku = KnotVector::clamped_uniform(3, 3).unwrap();
+        let g = ku.greville();
+        let n = g.len();
+        for (alpha, offset) in [(1e4, 1e3), (1e-4, 1e3), (1e4, 1e-3)] {
+            let pts = g
+                .iter()
+                .flat_map(|&u| {
+                    g.iter().map(move |&v| {
+                        [
+                            offset + 2.0 * u,
+                            1.5 * v,
+                            0.3 * (3.0 * u).sin() * (2.0 * v).cos(),
+                        ]
+                    })
+                })
+                .collect();
+            let s = NurbsSurface::try_new(ku.clone(), ku.clone(), pts, vec![1.0; n * n]).unwrap();
+            let mut config = crate::test_scenes::config(Geometry::Surface(s));
+            config.material = Material {
+                mu: 1.0,
+                alpha11: alpha,
+                alpha22: alpha,
+                beta11: 1e-2 * alpha,
+                beta22: 1e-2 * alpha,
+                ..Material::default()
+            };
+            let setup = crate::setup::Setup::new(&config).unwrap();
+            let model = setup.model();
+            let initial = model.initial_state(&[], 0.0);
+            let sys = ScalarSystem::of_dnurbs(model, &initial, "test").unwrap();
+            assert!(
+                sys.load.iter().flatten().all(|&f| f == 0.0),
+                "α {alpha}, offset {offset}: {:?}",
+                sys.load
+            );
+        }
+    }
 }

@@ -339,5 +339,17 @@ mod point_tests {
         let c = compare_points(&t, &still, &moving);
         assert!(c.relative_rms.is_nan() && c.rms > 0.0, "{c:?}");
         assert_eq!(c.reference_amplitude, 0.0);
+        // A reference moving along y alone: its amplitude is that motion, |Δy| = 0.75.
+        let along_y = [[1.0, 2.0, 3.0], [1.0, 2.75, 3.0], [1.0, 2.5, 3.0]];
+        let c = compare_points(&t, &along_y, &still);
+        assert_eq!(c.reference_amplitude, 0.75);
+    }
+
+    /// The MAC of a zero shape with any shape is 0 (no shape to compare), not 0/0.
+    #[test]
+    fn mac_with_a_zero_shape_is_zero() {
+        assert_eq!(mac(&[0.0, 0.0], &[1.0, 2.0]), 0.0);
+        assert_eq!(mac(&[1.0, 2.0], &[0.0, 0.0]), 0.0);
+        assert_eq!(mac(&[3.0, 4.0], &[6.0, 8.0]), 1.0);
     }
 }

@@ -6,7 +6,7 @@ use nurbspring_derive::paper::{greville_net, reproduce};
 use nurbspring_derive::{Config, FitDofs, FitOptions, InitialConditions, TimeSettings, derive_msm};
 use nurbspring_dnurbs::{Constraints, DnurbsOptions, Loads, Material, RestShape};
 use nurbspring_geom::{KnotVector, NurbsSurface};
-use nurbspring_msm::LatticeOptions;
+use nurbspring_msm::{Constants, LatticeOptions};
 use nurbspring_sim::IntegratorKind;
 
 fn paper_config() -> Config {
@@ -269,6 +269,25 @@ fn the_scaled_uniform_limit_schedules_like_the_model_of_each_mass() {
             );
         }
     }
+    // Other constants on the same setup (after the paper's are cached): their own limit,
+    // as a fresh setup computes it (stiffer springs: a smaller step).
+    let stiffer = Constants::from_pairs(paper_constants().iter().map(|(c, k)| (c, 9.0 * k)));
+    let cached = setup
+        .schedule(&stiffer, 0.005, IntegratorKind::SymplecticEuler, 0.08)
+        .unwrap();
+    let fresh = nurbspring_derive::Setup::new(&config)
+        .unwrap()
+        .schedule(&stiffer, 0.005, IntegratorKind::SymplecticEuler, 0.08)
+        .unwrap();
+    assert_eq!(cached, fresh);
+    let paper = setup
+        .schedule(&constants, 0.005, IntegratorKind::SymplecticEuler, 0.08)
+        .unwrap();
+    let (a, b) = (paper.1.unwrap(), cached.1.unwrap());
+    assert!(
+        (b.omega_max / a.omega_max - 3.0).abs() < 1e-7,
+        "{a:?} vs {b:?}"
+    );
     // Implicit schemes run as they are, without a limit.
     let (implicit, limit) = setup
         .schedule(&constants, 0.005, IntegratorKind::Newmark, 0.08)
@@ -356,4 +375,16 @@ fn beyond_rows_recomputed_from_the_trajectories() {
     // The horizons cut the run at different lengths.
     assert!(row.relative_rms[0].1 != row.relative_rms[1].1 || r.t.last().unwrap() <= &4.0);
     assert_eq!(table.rows[1].derivation, nurbspring_derive::Method::Modal);
+}
+
+/// With the mass given, the derivation still lists the eigenvalues of M when their dense
+/// solve can take the net (here 35, as with the scan), and selects the given mass.
+#[test]
+fn a_given_mass_still_lists_the_eigenvalues() {
+    let mut config = paper_config();
+    config.fit.mass = nurbspring_derive::MassChoice::Fixed(0.004);
+    let (d, _) = derive_msm(&config, None, &mut |_, _| {}).unwrap();
+    assert_eq!(d.mass.selected, 0.004);
+    assert_eq!(d.mass.eigenvalues.len(), 35);
+    assert!(d.mass.candidates.is_empty());
 }
