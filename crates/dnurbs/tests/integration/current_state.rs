@@ -472,3 +472,45 @@ fn distributed_load_is_per_unit_parameter_or_surface_area() {
         }
     }
 }
+
+/// Under loads fifty times those above, the first step of the iteration takes a free weight
+/// below zero: the steady state is refused, naming a weight that is not positive, rather than
+/// iterated on through a shape with a negative weight.
+#[test]
+fn a_steady_state_through_a_negative_weight_is_refused() {
+    let model = DnurbsModel::new(
+        Geometry::Surface(support::wavy_rational_patch()),
+        Material {
+            gamma: 0.0,
+            alpha11: 0.5,
+            alpha22: 0.5,
+            ..support::paper_material()
+        },
+        Loads {
+            gravity: [0.0, 0.0, -1.0],
+            distributed: [1.0, 0.0, 0.0],
+            ..Loads::default()
+        },
+        &Constraints {
+            fixed_rings: 1,
+            ..Constraints::default()
+        },
+        DnurbsOptions {
+            weights_as_dofs: true,
+            quadrature_points: Some(4),
+            ..DnurbsOptions::default()
+        },
+    )
+    .unwrap();
+    let text = model
+        .steady_state_with(SteadySettings::default())
+        .unwrap_err()
+        .to_string();
+    let weight: f64 = text
+        .split("reached weight ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(weight <= 0.0, "{text}");
+}
