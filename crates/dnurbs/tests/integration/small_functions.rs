@@ -520,3 +520,33 @@ fn quadrature_estimate_of_a_rational_surface_counts_every_term() {
     // g = 4, 5; the stiffness at g = 6, 7), so neither can be dropped unseen.
     assert!(mass_larger && stiffness_larger);
 }
+
+/// The modal solution is refused for a damped material, naming γ, and accepted undamped;
+/// with weights as unknowns only the Terzopoulos–Qin step runs.
+#[test]
+fn which_integrators_a_material_admits() {
+    use nurbspring_dnurbs::{DnurbsOptions, Material, integrator_problem};
+    use nurbspring_sim::IntegratorKind;
+    let damped = Material {
+        gamma: 0.25,
+        ..Material::default()
+    };
+    let why = integrator_problem(IntegratorKind::Modal, &damped, &DnurbsOptions::default())
+        .expect("a damped model has no modal solution");
+    assert!(why.contains("material.gamma = 0.25"), "{why}");
+    let undamped = Material::default();
+    assert_eq!(undamped.gamma, 0.0);
+    assert_eq!(
+        integrator_problem(IntegratorKind::Modal, &undamped, &DnurbsOptions::default()),
+        None
+    );
+    let rational = DnurbsOptions {
+        weights_as_dofs: true,
+        ..DnurbsOptions::default()
+    };
+    assert!(integrator_problem(IntegratorKind::Newmark, &undamped, &rational).is_some());
+    assert_eq!(
+        integrator_problem(IntegratorKind::TerzopoulosQin, &undamped, &rational),
+        None
+    );
+}
