@@ -605,3 +605,39 @@ fn uniform_grid_and_normal_of_a_plane_by_hand() {
         assert!((n[x] - e[x]).abs() < 1e-15, "{n:?}");
     }
 }
+
+/// A5.4 inserting values equal to an existing interior knot (0.45 twice, raising it to a
+/// triple knot, with 0.7 and 0.8 after): the same knots and matrix as A5.1 one knot at a time,
+/// and the same curve at 201 parameters.
+#[test]
+fn refinement_at_an_existing_knot_equals_insertion_one_at_a_time() {
+    let k = KnotVector::try_new(vec![0., 0., 0., 0., 0.2, 0.45, 0.7, 1., 1., 1., 1.], 3).unwrap();
+    let pts: Vec<[f64; 3]> = (0..7)
+        .map(|i| [i as f64, ((i * 5) % 7) as f64 * 0.3, (i as f64 * 0.9).sin()])
+        .collect();
+    let w = vec![1.0, 0.8, 1.3, 1.0, 0.7, 1.1, 1.0];
+    let c = nurbspring_geom::NurbsCurve::try_new(k, pts, w).unwrap();
+    let xs = [0.45, 0.45, 0.7, 0.8];
+    let (fine, m) = c.refine_knots(&xs).unwrap();
+    let mut step = c.clone();
+    let mut total = RefinementMatrix::identity(c.n_control_points());
+    for &x in &xs {
+        let (next, mi) = step.insert_knot(x, 1).unwrap();
+        total = mi.compose(&total);
+        step = next;
+    }
+    assert_eq!(step.basis().knots(), fine.basis().knots());
+    let (a, b) = (total.to_dense(), m.to_dense());
+    assert_eq!(a.len(), b.len());
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        assert!((x - y).abs() < 1e-14, "entry {i}: {x} vs {y}");
+    }
+    for s in 0..=200 {
+        let u = s as f64 / 200.0;
+        let (p, q) = (c.point(u).unwrap(), fine.point(u).unwrap());
+        assert!(
+            (0..3).all(|x| (p[x] - q[x]).abs() < 1e-12),
+            "u = {u}: {p:?} vs {q:?}"
+        );
+    }
+}
