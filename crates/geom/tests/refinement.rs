@@ -641,3 +641,25 @@ fn refinement_at_an_existing_knot_equals_insertion_one_at_a_time() {
         );
     }
 }
+
+/// A surface refuses a weight that is negative, zero, infinite or NaN, naming its index.
+#[test]
+fn surface_weights_must_be_positive_and_finite() {
+    let k = KnotVector::clamped_uniform(1, 1).unwrap();
+    let pts = vec![
+        [0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+    ];
+    assert!(NurbsSurface::try_new(k.clone(), k.clone(), pts.clone(), vec![1.0; 4]).is_ok());
+    for bad in [-1.0, 0.0, f64::INFINITY, f64::NAN] {
+        let err =
+            NurbsSurface::try_new(k.clone(), k.clone(), pts.clone(), vec![1.0, 1.0, bad, 1.0])
+                .unwrap_err();
+        assert!(
+            matches!(err, GeomError::InvalidWeight { index: 2, .. }),
+            "{bad}: {err}"
+        );
+    }
+}
