@@ -345,6 +345,20 @@ mod point_tests {
         assert_eq!(c.reference_amplitude, 0.75);
     }
 
+    /// A period that is no multiple of the sampling step (0.737 s sampled every 0.01 s over
+    /// 20 periods): the crossings are interpolated between samples, so the period comes out
+    /// to the interpolation error, far below the step.
+    #[test]
+    fn a_period_between_samples_is_interpolated() {
+        let t: Vec<f64> = (0..1500).map(|i| i as f64 * 0.01).collect();
+        let z: Vec<f64> = t
+            .iter()
+            .map(|t| (2.0 * std::f64::consts::PI * t / 0.737 + 0.1).sin())
+            .collect();
+        let p = dominant_period(&t, &z).unwrap();
+        assert!((p - 0.737).abs() < 1e-4, "{p}");
+    }
+
     /// The MAC of a zero shape with any shape is 0 (no shape to compare), not 0/0.
     #[test]
     fn mac_with_a_zero_shape_is_zero() {

@@ -967,3 +967,15 @@ fn the_reduction_scales_with_the_material() {
         assert!(close(q.dnurbs, 1e3 * p.dnurbs, 1e-8) && close(q.msm, 1e3 * p.msm, 1e-8));
     }
 }
+
+/// A scene that neither moves nor loads the D-NURBS gives the excitation derivation nothing to
+/// weight: refused, naming initial.velocity.
+#[test]
+fn the_excitation_derivation_refuses_a_scene_without_excitation() {
+    let mut config = config(Method::Excitation);
+    config.initial.velocities = Vec::new();
+    let Err(e) = derive_linear(&config, None) else {
+        panic!("a scene without excitation must be refused");
+    };
+    assert!(e.to_string().contains("initial.velocity"), "{e}");
+}
