@@ -427,16 +427,21 @@ fn surface_insertion_errors_and_single_direction() {
     }
 }
 
-/// Degree elevation of a cubic with simple interior knots (A5.9's knot-removal steps run at
-/// every interior knot) by 1 and 2: the same curve at 201 parameters, to round-off.
-#[test]
-fn elevating_a_cubic_with_simple_knots_keeps_it() {
+/// A rational cubic with simple interior knots 0.2, 0.45, 0.7.
+fn rational_cubic() -> NurbsCurve {
     let k = KnotVector::try_new(vec![0., 0., 0., 0., 0.2, 0.45, 0.7, 1., 1., 1., 1.], 3).unwrap();
     let pts: Vec<[f64; 3]> = (0..7)
         .map(|i| [i as f64, ((i * 5) % 7) as f64 * 0.3, (i as f64 * 0.9).sin()])
         .collect();
     let w = vec![1.0, 0.8, 1.3, 1.0, 0.7, 1.1, 1.0];
-    let c = nurbspring_geom::NurbsCurve::try_new(k, pts, w).unwrap();
+    NurbsCurve::try_new(k, pts, w).unwrap()
+}
+
+/// Degree elevation of a cubic with simple interior knots (A5.9's knot-removal steps run at
+/// every interior knot) by 1 and 2: the same curve at 201 parameters, to round-off.
+#[test]
+fn elevating_a_cubic_with_simple_knots_keeps_it() {
+    let c = rational_cubic();
     for t in [1, 2] {
         let (up, _) = c.elevate_degree(t).unwrap();
         assert_eq!(up.basis().degree(), 3 + t);
@@ -611,12 +616,7 @@ fn uniform_grid_and_normal_of_a_plane_by_hand() {
 /// and the same curve at 201 parameters.
 #[test]
 fn refinement_at_an_existing_knot_equals_insertion_one_at_a_time() {
-    let k = KnotVector::try_new(vec![0., 0., 0., 0., 0.2, 0.45, 0.7, 1., 1., 1., 1.], 3).unwrap();
-    let pts: Vec<[f64; 3]> = (0..7)
-        .map(|i| [i as f64, ((i * 5) % 7) as f64 * 0.3, (i as f64 * 0.9).sin()])
-        .collect();
-    let w = vec![1.0, 0.8, 1.3, 1.0, 0.7, 1.1, 1.0];
-    let c = nurbspring_geom::NurbsCurve::try_new(k, pts, w).unwrap();
+    let c = rational_cubic();
     let xs = [0.45, 0.45, 0.7, 0.8];
     let (fine, m) = c.refine_knots(&xs).unwrap();
     let mut step = c.clone();

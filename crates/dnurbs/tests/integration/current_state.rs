@@ -145,9 +145,10 @@ fn steady_state_with_free_weights_is_the_nonlinear_equilibrium() {
 /// converge within the default 200 iterations here (checked by emptying the Anderson history:
 /// it stalls), Anderson mixing does, and what it returns is an equilibrium, its residual
 /// recomputed from matrices assembled at that shape.
-#[test]
-fn anderson_mixing_reaches_the_equilibrium_under_larger_loads() {
-    let model = DnurbsModel::new(
+/// The rational sheet with free weights, undamped, under gravity `−g` along z and a
+/// distributed load `g` along x.
+fn loaded_model(g: f64) -> DnurbsModel {
+    DnurbsModel::new(
         Geometry::Surface(support::wavy_rational_patch()),
         Material {
             gamma: 0.0,
@@ -156,8 +157,8 @@ fn anderson_mixing_reaches_the_equilibrium_under_larger_loads() {
             ..support::paper_material()
         },
         Loads {
-            gravity: [0.0, 0.0, -0.12],
-            distributed: [0.12, 0.0, 0.0],
+            gravity: [0.0, 0.0, -g],
+            distributed: [g, 0.0, 0.0],
             ..Loads::default()
         },
         &Constraints {
@@ -170,7 +171,12 @@ fn anderson_mixing_reaches_the_equilibrium_under_larger_loads() {
             ..DnurbsOptions::default()
         },
     )
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn anderson_mixing_reaches_the_equilibrium_under_larger_loads() {
+    let model = loaded_model(0.12);
     let steady = model.steady_state_with(SteadySettings::default()).unwrap();
     let r = max_abs(&residual(&model, &steady.p));
     let f = max_abs(&residual(&model, model.p0()));
@@ -478,30 +484,7 @@ fn distributed_load_is_per_unit_parameter_or_surface_area() {
 /// iterated on through a shape with a negative weight.
 #[test]
 fn a_steady_state_through_a_negative_weight_is_refused() {
-    let model = DnurbsModel::new(
-        Geometry::Surface(support::wavy_rational_patch()),
-        Material {
-            gamma: 0.0,
-            alpha11: 0.5,
-            alpha22: 0.5,
-            ..support::paper_material()
-        },
-        Loads {
-            gravity: [0.0, 0.0, -1.0],
-            distributed: [1.0, 0.0, 0.0],
-            ..Loads::default()
-        },
-        &Constraints {
-            fixed_rings: 1,
-            ..Constraints::default()
-        },
-        DnurbsOptions {
-            weights_as_dofs: true,
-            quadrature_points: Some(4),
-            ..DnurbsOptions::default()
-        },
-    )
-    .unwrap();
+    let model = loaded_model(1.0);
     let text = model
         .steady_state_with(SteadySettings::default())
         .unwrap_err()
