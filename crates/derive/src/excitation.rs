@@ -364,7 +364,7 @@ mod tests {
                 for (j, w) in omega.iter().enumerate() {
                     let e = exact(k, m, j + 1);
                     assert!(
-                        (w - e).abs() < 1e-9 * e,
+                        (w - e).abs() < 1e-12 * e,
                         "k {k}, m {m}, mode {j}: {w} vs {e}"
                     );
                 }

@@ -423,7 +423,7 @@ pub(crate) mod tests {
                 let exact =
                     2.0 * (k / m).sqrt() * (std::f64::consts::PI / (2.0 * (n + 1) as f64)).sin();
                 assert!(
-                    (w - exact).abs() < 1e-9 * exact,
+                    (w - exact).abs() < 1e-12 * exact,
                     "k {k}, m {m}: {w} vs {exact}"
                 );
             }

@@ -115,7 +115,7 @@ fn recovers_a_synthetic_lattice() {
     let residual = (num / den).sqrt();
     assert!(residual > 1e-3, "{residual}");
     assert!(
-        (sol.report.relative_residual - residual).abs() < 1e-9 * residual,
+        (sol.report.relative_residual - residual).abs() < 1e-13 * residual,
         "{} vs {residual}",
         sol.report.relative_residual
     );
