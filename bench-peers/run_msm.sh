@@ -21,7 +21,7 @@ echo "== nurbspring-msm (crates/msm/benches/step.rs), rayon default pool"
 cargo bench -p nurbspring-msm --bench step
 echo "== the same, one thread (RAYON_NUM_THREADS=1), explicit step only"
 RAYON_NUM_THREADS=1 cargo bench -p nurbspring-msm --bench step -- \
-  --save-baseline one-thread "triad|internal_force|symplectic"
+  --save-baseline one-thread "triad|internal_force|symplectic|spring_arithmetic"
 cd bench-peers
 for peer in numpy taichi warp; do
   echo "== $peer (bench-peers/msm_step_$peer.py)"

@@ -203,6 +203,18 @@ class Run:
         add("explicit step 256², achieved bandwidth vs cache-sized triad",
             "not measured" if bw is None else f"{bw:.1f} GB/s (triad {triad:.1f})" if triad else f"{bw:.1f} GB/s",
             ratio(triad, bw), "within 1.5×", None if not (bw and triad) else triad / bw <= 1.5)
+        # The arithmetic floor: no exact f64 step is faster than the square roots and divisions
+        # of its springs, whatever the bandwidth.
+        floor = self.cmid("msm/spring_arithmetic/256x256")
+        traffic = (self.c("msm/symplectic_euler_step/256x256") or {}).get("throughput") or {}
+        bound = traffic.get("Bytes", 0) / (triad * 1e9) if triad else None
+        if fused2 and floor and bound:
+            rows.append(f"| explicit step 256², against its two bounds: bandwidth (bytes / cache triad) and "
+                        f"arithmetic (√ and ÷ of every spring) | {fmt_time(fused2)}; bounds {fmt_time(bound)} "
+                        f"and {fmt_time(floor)} | {fused2 / floor:.2f}× the arithmetic bound | — | the arithmetic "
+                        f"bound alone is {floor / bound:.2f}× the bandwidth bound |")
+        else:
+            rows.append("| explicit step 256², against its two bounds | not measured | — | — | not measured |")
         be = self.cmid("msm/backward_euler_step/128x128")
         scipy = (self.peer("scipy", "backward_euler_step_128x128") or {}).get("median")
         add("backward-Euler step 128², vs SciPy", fmt_time(be), ratio(scipy, be), "≥ 30×", meets(ratio(scipy, be), 30))
@@ -330,6 +342,7 @@ class Run:
         warp = self.peer("warp", "step_256x256")
         rows = ["| benchmark | rayon's pool | one thread |", "|---|---|---|"]
         for label, bench in (("fused step (`symplectic_euler_step`)", "msm/symplectic_euler_step/256x256"),
+                             ("arithmetic floor (√ and ÷ of every spring only)", "msm/spring_arithmetic/256x256"),
                              ("generic step", "msm/symplectic_euler_step_generic/256x256"),
                              ("internal force only (generic)", "msm/internal_force/256x256")):
             cells = []

@@ -366,6 +366,12 @@ pub fn warnings(
              initial.displacement or loads)"
                 .into(),
         );
+    } else if let Some(why) = &validation.msm_stopped {
+        out.push(format!(
+            "the MSM's validation run stopped before {:.3} s ({why}), so nothing after that is \
+             compared and its relative RMS counts as infinite",
+            validation.horizon
+        ));
     } else if above(validation.relative_rms, WARN_RELATIVE_RMS) {
         out.push(format!(
             "the central node's relative RMS against the D-NURBS is {:.1}% over {:.3} s (above {:.0}%)",
@@ -391,7 +397,12 @@ pub fn warnings(
             mass.free_msm, mass.free_dnurbs
         ));
     }
-    if above(second.relative_rms, 2.0 * WARN_RELATIVE_RMS) {
+    if let Some(why) = &second.msm_stopped {
+        out.push(format!(
+            "under the second excitation the MSM's run stopped before {:.3} s ({why})",
+            second.horizon
+        ));
+    } else if above(second.relative_rms, 2.0 * WARN_RELATIVE_RMS) {
         out.push(format!(
             "under the second excitation the central node's relative RMS is {:.1}%",
             pct(second.relative_rms)
@@ -834,5 +845,37 @@ mod tests {
         let clamped = ["k_bend".to_string()];
         let w = warn(Method::Paper, &masses(2.0, 2.0, 2.0), &clamped);
         assert_eq!(w, vec!["k_bend was clamped to 0 by k >= 0".to_string()]);
+    }
+
+    /// A validation run that stopped says so, with its reason, instead of an infinite RMS
+    /// ("inf%"), for the scene's excitation and for the second one.
+    #[test]
+    fn a_stopped_run_is_named_with_its_reason() {
+        let rows: [crate::outcome::FrequencyRow; 0] = [];
+        let mass = MassReport {
+            free_msm: 1.0,
+            free_dnurbs: 1.0,
+            ..MassReport::default()
+        };
+        let stopped = Validation {
+            msm_stopped: Some("Newton iteration failed at step 7".into()),
+            ..validation_with(f64::INFINITY)
+        };
+        let quiet = validation_with(0.0);
+        let w = warnings(Method::Modal, &stopped, &quiet, &rows, &mass, &[]);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with("the MSM's validation run stopped before 1.000 s (Newton iteration failed at step 7)"),
+            "{w:?}"
+        );
+        assert!(!w[0].contains("inf%"), "{w:?}");
+        let w = warnings(Method::Modal, &quiet, &stopped, &rows, &mass, &[]);
+        assert_eq!(
+            w,
+            vec![
+                "under the second excitation the MSM's run stopped before 1.000 s (Newton iteration failed at step 7)"
+                    .to_string()
+            ]
+        );
     }
 }

@@ -12,6 +12,10 @@
 //!   pass); its throughput is in bytes, those of `MsmModel::fused_step_traffic` (positions
 //!   and velocities read and written once, one rest length per spring), so criterion's GB/s
 //!   is the achieved bandwidth to set against the triad;
+//! - `msm/spring_arithmetic/256x256`: the arithmetic floor of that step, the square root and
+//!   division of each spring's `k (1 − l/|d|)` and nothing else (the same count of springs,
+//!   in blocks of 1024 that stay in the L1 cache, on the rayon pool, compiled for the CPU's
+//!   vector unit as the fused step is): no exact f64 step can be faster;
 //! - `msm/symplectic_euler_step_generic/256x256`: the same step by the generic path (the
 //!   model's fused step hidden: forces per node, then the update), for comparison;
 //! - `msm/backward_euler_step/128x128`: one backward-Euler step (Newton on the sparse tangent
@@ -146,6 +150,50 @@ fn memory(c: &mut Criterion) {
     group.finish();
 }
 
+/// Springs per block of the arithmetic floor: 3 × 8 KiB of data, in the L1 cache.
+const FLOOR_BLOCK: usize = 1024;
+
+/// `out = k (1 − l / √(d²))` over one block, compiled for the CPU's vector unit (pulp's
+/// dispatch, as the fused step's bands are).
+struct SpringArithmetic<'a> {
+    k: f64,
+    d2: &'a [f64],
+    rest: &'a [f64],
+    out: &'a mut [f64],
+}
+
+impl pulp::WithSimd for SpringArithmetic<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let SpringArithmetic { k, d2, rest, out } = self;
+        for ((o, d2), l) in out.iter_mut().zip(d2).zip(rest) {
+            *o = k * (1.0 - l / d2.sqrt());
+        }
+    }
+}
+
+/// The square root and division of `springs` springs, in blocks of [`FLOOR_BLOCK`] taken from
+/// `d2` and `rest`, on the rayon pool.
+fn spring_arithmetic(springs: usize, d2: &[f64], rest: &[f64]) {
+    let arch = pulp::Arch::new();
+    (0..springs.div_ceil(FLOOR_BLOCK))
+        .into_par_iter()
+        .with_min_len(16)
+        .for_each(|b| {
+            let len = FLOOR_BLOCK.min(springs - b * FLOOR_BLOCK);
+            let mut out = [0.0; FLOOR_BLOCK];
+            arch.dispatch(SpringArithmetic {
+                k: 1000.0,
+                d2: &d2[..len],
+                rest: &rest[..len],
+                out: &mut out[..len],
+            });
+            black_box(&out);
+        });
+}
+
 fn explicit(c: &mut Criterion) {
     let model = sheet(256);
     let springs = model.lattice().springs.len();
@@ -172,6 +220,19 @@ fn explicit(c: &mut Criterion) {
     let mut s = state.clone();
     group.bench_function("symplectic_euler_step_generic/256x256", |b| {
         b.iter(|| stepper.step(&generic, &mut s, dt).unwrap())
+    });
+    // The squared lengths and rest lengths of the sheet's first block of springs.
+    let lattice = model.lattice();
+    let (d2, rest): (Vec<f64>, Vec<f64>) = lattice.springs[..FLOOR_BLOCK]
+        .iter()
+        .map(|sp| {
+            let (xa, xb) = (lattice.positions[sp.a], lattice.positions[sp.b]);
+            let d2: f64 = (0..3).map(|c| (xa[c] - xb[c]).powi(2)).sum();
+            (d2, sp.rest_length)
+        })
+        .unzip();
+    group.bench_function("spring_arithmetic/256x256", |b| {
+        b.iter(|| spring_arithmetic(springs, black_box(&d2), black_box(&rest)))
     });
     let mut stepper = make_stepper(IntegratorKind::SymplecticEuler, &model, &state, dt).unwrap();
     let mut s = state.clone();

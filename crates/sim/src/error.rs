@@ -71,17 +71,21 @@ pub enum SimError {
     },
     /// Newton's method did not reach its tolerance in an implicit step.
     #[error(
-        "Newton iteration failed at step {step} (t = {time:e}) after {iterations} iterations; relative residual {residual:e}"
+        "Newton iteration failed at step {step} (t = {time:e}) after {iterations} iterations; relative residual {residual:e}{}",
+        halving_note(*.halvings)
     )]
     NewtonFailed {
         /// Step being computed (1-based).
         step: usize,
         /// Time at the end of that step.
         time: f64,
-        /// Iterations performed.
+        /// Iterations performed (in the whole step, the first attempt).
         iterations: usize,
-        /// Final relative residual.
+        /// Final relative residual (of the whole step, the first attempt).
         residual: f64,
+        /// How many times the step was halved after that attempt without success (the
+        /// smallest step tried is `Δt / 2^halvings`; 0 when it was not retried).
+        halvings: u32,
     },
     /// A vector or matrix has the wrong size.
     #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
@@ -124,5 +128,16 @@ impl SimError {
             | SimError::DimensionMismatch { .. }
             | SimError::Linalg(_) => ErrorKind::Run,
         }
+    }
+}
+
+/// The end of [`SimError::NewtonFailed`]'s message: the halvings tried after the whole step.
+fn halving_note(halvings: u32) -> String {
+    match halvings {
+        0 => String::new(),
+        h => format!(
+            "; the step tried again in halves down to Δt/{} did not converge either",
+            1u64 << h
+        ),
     }
 }

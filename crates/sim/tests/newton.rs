@@ -126,6 +126,7 @@ fn newton_ends_by_the_step_size_on_coordinates_far_from_the_origin() {
             let one = NewtonCounts {
                 factorizations: 1,
                 iterations: 1,
+                halved_steps: 0,
             };
             assert_eq!(stepper.newton_counts(), one);
         }
@@ -163,6 +164,7 @@ fn a_linear_model_behind_newton_is_factored_once_and_solved_in_one_iteration_a_s
     let expected = NewtonCounts {
         factorizations: 1,
         iterations: steps,
+        halved_steps: 0,
     };
     assert_eq!(be.newton_counts(), expected, "backward Euler");
     assert_eq!(nm.newton_counts(), expected, "Newmark");
@@ -361,5 +363,111 @@ fn newton_steps_that_lower_the_residual_are_taken_whole() {
             "{kind}: evaluations of the energy"
         );
         assert_eq!(model.projections.load(Ordering::Relaxed), 0, "{kind}");
+    }
+}
+
+/// A stiff Duffing chain (ε = 50, far from rest) where Newton with a small iteration limit
+/// fails on the whole step but converges on its halves: the step is taken as two steps of
+/// `Δt/2`, and those are, bit for bit, the two steps of the same scheme built for `Δt/2` (the
+/// same operations from the same state and guess), while the time lands exactly on `Δt`.
+#[test]
+fn a_step_on_which_newton_fails_is_two_steps_of_half_the_size() {
+    let c = Chain {
+        n: 4,
+        k: 2.0,
+        m: 1.0,
+    };
+    let model = Duffing::new(&c, 50.0);
+    let start = State::new(vec![0.8, -0.6, 0.7, 0.5], vec![0.0; 4]);
+    let newton = NewtonSettings {
+        tolerance: 1e-10,
+        max_iterations: 5,
+    };
+    let whole_and_halves =
+        |stepper: &mut dyn Stepper, halves: &mut dyn Stepper, dt: f64| -> (State, State) {
+            let (mut s, mut h) = (start.clone(), start.clone());
+            stepper.step(&model, &mut s, dt).unwrap();
+            halves.step(&model, &mut h, dt / 2.0).unwrap();
+            halves.step(&model, &mut h, dt / 2.0).unwrap();
+            (s, h)
+        };
+    // Backward Euler at Δt = 0.05, Newmark at Δt = 0.2.
+    let dt = 0.05;
+    let mut be = BackwardEuler::new(&model, dt, newton).unwrap();
+    let mut be_half = BackwardEuler::new(&model, dt / 2.0, newton).unwrap();
+    let (s, h) = whole_and_halves(&mut be, &mut be_half, dt);
+    assert_eq!(be.newton_counts().halved_steps, 1);
+    assert_eq!(be_half.newton_counts().halved_steps, 0);
+    assert_eq!((&s.q, &s.v), (&h.q, &h.v), "backward Euler");
+    assert_eq!(s.t, dt);
+    // The whole step used its 5 iterations, the halves as many as the half-step scheme.
+    assert_eq!(
+        be.newton_counts().iterations,
+        5 + be_half.newton_counts().iterations
+    );
+
+    let dt = 0.2;
+    let mut nm = Newmark::new(&model, &start, dt, newton).unwrap();
+    let mut nm_half = Newmark::new(&model, &start, dt / 2.0, newton).unwrap();
+    let (s, h) = whole_and_halves(&mut nm, &mut nm_half, dt);
+    assert_eq!(nm.newton_counts().halved_steps, 1);
+    assert_eq!(nm_half.newton_counts().halved_steps, 0);
+    assert_eq!((&s.q, &s.v), (&h.q, &h.v), "Newmark");
+    assert_eq!(s.t, dt);
+    // Newmark carries the end-of-step acceleration: the next step (halved again, the whole
+    // step failing from this state too) goes on exactly as the half-step scheme's third and
+    // fourth steps, so the halves left the acceleration of their end.
+    let (mut s2, mut h2) = (s.clone(), h.clone());
+    nm.step(&model, &mut s2, dt).unwrap();
+    nm_half.step(&model, &mut h2, dt / 2.0).unwrap();
+    nm_half.step(&model, &mut h2, dt / 2.0).unwrap();
+    assert_eq!(nm.newton_counts().halved_steps, 2);
+    assert_eq!((&s2.q, &s2.v), (&h2.q, &h2.v), "Newmark, second step");
+}
+
+/// When the halves fail too (no Newton iteration allowed: nothing converges), the error is
+/// the whole step's, names the halvings tried (down to Δt/64), and the state is left as it
+/// was, bit for bit, for both schemes.
+#[test]
+fn a_step_whose_halves_fail_too_reports_the_whole_step_and_leaves_the_state() {
+    let c = Chain {
+        n: 2,
+        k: 1.0,
+        m: 1.0,
+    };
+    let mut model = Duffing::new(&c, 1.0);
+    model.force = vec![0.1, 0.3];
+    let newton = NewtonSettings {
+        tolerance: 1e-10,
+        max_iterations: 0,
+    };
+    let start = State::new(vec![0.5, -0.25], vec![0.1, 0.0]);
+    let mut be = BackwardEuler::new(&model, 0.1, newton).unwrap();
+    let mut nm = Newmark::new(&model, &start, 0.1, newton).unwrap();
+    for (name, stepper) in [
+        ("backward Euler", &mut be as &mut dyn Stepper),
+        ("Newmark", &mut nm),
+    ] {
+        let mut s = start.clone();
+        let err = stepper.step(&model, &mut s, 0.1).unwrap_err();
+        match &err {
+            SimError::NewtonFailed {
+                step,
+                iterations,
+                halvings,
+                time,
+                ..
+            } => {
+                assert_eq!((*step, *iterations, *halvings), (1, 0, 6), "{name}");
+                assert_eq!(*time, 0.1, "{name}");
+            }
+            other => panic!("{name}: expected NewtonFailed, got {other:?}"),
+        }
+        assert!(
+            err.to_string()
+                .ends_with("the step tried again in halves down to Δt/64 did not converge either"),
+            "{name}: {err}"
+        );
+        assert_eq!((&s.q, &s.v, s.t), (&start.q, &start.v, start.t), "{name}");
     }
 }

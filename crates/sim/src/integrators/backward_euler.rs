@@ -6,18 +6,21 @@
 //! `(M + ΔtD + Δt²K_T) Δv = …` for `Δv = Δt a`. The Newton matrix is factored by sparse
 //! Cholesky ([`nurbspring_linalg::SpdSolver`], symbolic analysis once) while it is positive
 //! definite; when Cholesky fails — compressed springs make `K_T` indefinite — the step falls
-//! back to a sparse LU ([`nurbspring_linalg::LuSolver`]). Linear models factor once.
+//! back to a sparse LU ([`nurbspring_linalg::LuSolver`]). Linear models factor once. A step on
+//! which Newton fails is taken in halves ([`super::implicit`]'s step halving).
 //! First order, unconditionally stable, numerically dissipative.
 
-use super::implicit::ImplicitCore;
+use super::implicit::{CoreLadder, HalvableStep, step_with_halving};
 use super::{NewtonSettings, check_fixed_dt};
 use crate::{DynamicModel, SimError, State};
 
 /// Backward Euler stepper.
 pub struct BackwardEuler {
     dt: f64,
-    core: ImplicitCore,
+    cores: CoreLadder,
+    /// The last step's acceleration, the Newton initial guess.
     a: Vec<f64>,
+    a_new: Vec<f64>,
     q_hat: Vec<f64>,
     steps: usize,
 }
@@ -30,19 +33,66 @@ impl BackwardEuler {
         newton: NewtonSettings,
     ) -> Result<Self, SimError> {
         let n = model.n_dofs();
-        let core = ImplicitCore::new("backward-euler", model, dt * dt, dt, newton)?;
+        let cores = CoreLadder::new("backward-euler", model, dt, coefficients, newton)?;
         Ok(Self {
             dt,
-            core,
+            cores,
             a: vec![0.0; n],
+            a_new: vec![0.0; n],
             q_hat: vec![0.0; n],
             steps: 0,
         })
     }
 
-    /// How many Newton matrices were factored and Newton iterations run so far.
+    /// How many Newton matrices were factored, Newton iterations run and steps halved so far.
     pub fn newton_counts(&self) -> super::NewtonCounts {
-        self.core.counts
+        self.cores.counts()
+    }
+}
+
+/// `(c_q, c_v) = (h², h)`.
+fn coefficients(h: f64) -> (f64, f64) {
+    (h * h, h)
+}
+
+impl HalvableStep for BackwardEuler {
+    fn substep(
+        &mut self,
+        model: &dyn DynamicModel,
+        state: &mut State,
+        level: u32,
+    ) -> Result<(), SimError> {
+        let dt = self.cores.h(level);
+        for i in 0..state.q.len() {
+            self.q_hat[i] = state.q[i] + dt * state.v[i];
+        }
+        let t_new = state.t + dt;
+        // The previous step's acceleration is the Newton initial guess.
+        self.a_new.copy_from_slice(&self.a);
+        self.cores.core(model, level)?.solve(
+            model,
+            &state.q,
+            &self.q_hat,
+            &state.v,
+            t_new,
+            &mut self.a_new,
+            self.steps,
+        )?;
+        std::mem::swap(&mut self.a, &mut self.a_new);
+        for i in 0..state.q.len() {
+            state.v[i] += dt * self.a[i];
+            state.q[i] = self.q_hat[i] + dt * dt * self.a[i];
+        }
+        state.t = t_new;
+        Ok(())
+    }
+
+    fn carried(&mut self) -> &mut Vec<f64> {
+        &mut self.a
+    }
+
+    fn ladder(&mut self) -> &mut CoreLadder {
+        &mut self.cores
     }
 }
 
@@ -55,25 +105,6 @@ impl super::Stepper for BackwardEuler {
     ) -> Result<(), SimError> {
         check_fixed_dt("backward-euler", self.dt, dt)?;
         self.steps += 1;
-        for i in 0..state.q.len() {
-            self.q_hat[i] = state.q[i] + dt * state.v[i];
-        }
-        let t_new = state.t + dt;
-        // The previous step's acceleration is the Newton initial guess.
-        self.core.solve(
-            model,
-            &state.q,
-            &self.q_hat,
-            &state.v,
-            t_new,
-            &mut self.a,
-            self.steps,
-        )?;
-        for i in 0..state.q.len() {
-            state.v[i] += dt * self.a[i];
-            state.q[i] = self.q_hat[i] + dt * dt * self.a[i];
-        }
-        state.t = t_new;
-        Ok(())
+        step_with_halving(self, model, state)
     }
 }

@@ -28,11 +28,21 @@
 //! the step is backtracked until Ψ falls by the Armijo fraction [`ARMIJO`] of its slope, so
 //! the iteration cannot wander; a step that lowers the residual is taken whole, so the line
 //! search costs nothing where Newton already converges.
+//!
+//! **Step halving.** A step on which Newton still fails (its iteration limit reached) is taken
+//! again as two steps of half the size from the same state, each of them halved again when it
+//! fails, down to `Δt / 2^MAX_HALVINGS_OF_A_STEP` ([`step_with_halving`]; each step size has its
+//! own core, made when first needed). A fixed-step scheme keeps its time grid: the halves
+//! only replace a step that would otherwise end the run, and
+//! [`NewtonCounts::halved_steps`] counts them. Smaller steps bring the end-of-step state
+//! closer to the start, where the predictor is a good Newton guess and the step energy more
+//! nearly convex (`M/c_q` grows as `1/h²`), which is what rescues a step through a fast,
+//! strongly nonlinear event such as a lattice snapping through.
 
 use nurbspring_linalg::{LinalgError, LuSolver, ShiftedSum, SparseMatrix, SpdSolver};
 
 use super::{NewtonSettings, norm};
-use crate::{DynamicModel, SimError};
+use crate::{DynamicModel, SimError, State};
 
 /// Factorization of a Newton matrix: Cholesky when possible, LU fallback.
 pub(crate) struct NewtonSolver {
@@ -127,6 +137,168 @@ pub struct NewtonCounts {
     pub factorizations: usize,
     /// Newton iterations (each one solve with the current factor).
     pub iterations: usize,
+    /// Steps whose Newton iteration failed and that were taken in halves instead
+    /// ([`step_with_halving`]).
+    pub halved_steps: usize,
+}
+
+/// Most halvings of a step whose Newton iteration failed: the smallest step tried is
+/// `Δt / 2^MAX_HALVINGS_OF_A_STEP`.
+pub(crate) const MAX_HALVINGS_OF_A_STEP: u32 = 6;
+
+/// The implicit cores of one scheme for the step sizes `Δt / 2^l`, `l = 0, 1, …` (level `l`),
+/// each made when a step is first halved that far.
+pub(crate) struct CoreLadder {
+    name: &'static str,
+    dt: f64,
+    /// `(c_q, c_v)` of the scheme for a step `h`.
+    coefficients: fn(f64) -> (f64, f64),
+    newton: NewtonSettings,
+    cores: Vec<ImplicitCore>,
+    halved_steps: usize,
+}
+
+impl CoreLadder {
+    /// The ladder with the core of the whole step `dt` (level 0).
+    pub(crate) fn new(
+        name: &'static str,
+        model: &dyn DynamicModel,
+        dt: f64,
+        coefficients: fn(f64) -> (f64, f64),
+        newton: NewtonSettings,
+    ) -> Result<Self, SimError> {
+        let (cq, cv) = coefficients(dt);
+        let core = ImplicitCore::new(name, model, cq, cv, newton)?;
+        Ok(Self {
+            name,
+            dt,
+            coefficients,
+            newton,
+            cores: vec![core],
+            halved_steps: 0,
+        })
+    }
+
+    /// The step size of level `level`.
+    pub(crate) fn h(&self, level: u32) -> f64 {
+        self.dt / f64::from(1u32 << level)
+    }
+
+    /// The core of level `level`.
+    pub(crate) fn core(
+        &mut self,
+        model: &dyn DynamicModel,
+        level: u32,
+    ) -> Result<&mut ImplicitCore, SimError> {
+        while self.cores.len() <= level as usize {
+            let h = self.h(self.cores.len() as u32);
+            let (cq, cv) = (self.coefficients)(h);
+            self.cores
+                .push(ImplicitCore::new(self.name, model, cq, cv, self.newton)?);
+        }
+        Ok(&mut self.cores[level as usize])
+    }
+
+    /// The counts of all levels together.
+    pub(crate) fn counts(&self) -> NewtonCounts {
+        let mut counts = NewtonCounts {
+            halved_steps: self.halved_steps,
+            ..Default::default()
+        };
+        for core in &self.cores {
+            counts.factorizations += core.counts.factorizations;
+            counts.iterations += core.counts.iterations;
+        }
+        counts
+    }
+}
+
+/// A fixed-step implicit scheme whose steps can be halved.
+pub(crate) trait HalvableStep {
+    /// One step of size `Δt / 2^level` from `state`, with the core of that level. On an error
+    /// it leaves `state` and whatever the scheme carries from step to step as they were.
+    fn substep(
+        &mut self,
+        model: &dyn DynamicModel,
+        state: &mut State,
+        level: u32,
+    ) -> Result<(), SimError>;
+
+    /// What the scheme carries from step to step besides the state (Newmark's acceleration),
+    /// saved before a halved step and restored when it fails.
+    fn carried(&mut self) -> &mut Vec<f64>;
+
+    fn ladder(&mut self) -> &mut CoreLadder;
+}
+
+/// One step of `Δt`. When Newton fails on it, the step is taken as two steps of `Δt/2`, each of
+/// them halved again on failure, down to `Δt / 2^MAX_HALVINGS_OF_A_STEP` (a step cut back, as
+/// finite-element codes do with a load increment): the time grid seen by the caller stays that
+/// of `Δt`, the halves only replace a step that would otherwise end the run. If the halves fail
+/// too, the state is left as it was and the error is the whole step's, with the halvings
+/// tried.
+pub(crate) fn step_with_halving(
+    scheme: &mut dyn HalvableStep,
+    model: &dyn DynamicModel,
+    state: &mut State,
+) -> Result<(), SimError> {
+    let failed = match scheme.substep(model, state, 0) {
+        Err(e @ SimError::NewtonFailed { .. }) => e,
+        other => return other,
+    };
+    let (saved, carried) = (state.clone(), scheme.carried().clone());
+    let t_end = state.t + scheme.ladder().h(0);
+    let mut deepest = 1;
+    match halves(scheme, model, state, 1, &mut deepest) {
+        Ok(()) => {
+            // The time of the whole step, as an unhalved step computes it.
+            state.t = t_end;
+            scheme.ladder().halved_steps += 1;
+            Ok(())
+        }
+        Err(_) => {
+            *state = saved;
+            *scheme.carried() = carried;
+            let SimError::NewtonFailed {
+                step,
+                time,
+                iterations,
+                residual,
+                ..
+            } = failed
+            else {
+                unreachable!("matched above")
+            };
+            Err(SimError::NewtonFailed {
+                step,
+                time,
+                iterations,
+                residual,
+                halvings: deepest,
+            })
+        }
+    }
+}
+
+/// Two steps of level `level`, each halved again when its Newton iteration fails; `deepest`
+/// records the deepest level tried.
+fn halves(
+    scheme: &mut dyn HalvableStep,
+    model: &dyn DynamicModel,
+    state: &mut State,
+    level: u32,
+    deepest: &mut u32,
+) -> Result<(), SimError> {
+    *deepest = (*deepest).max(level);
+    for _ in 0..2 {
+        match scheme.substep(model, state, level) {
+            Err(SimError::NewtonFailed { .. }) if level < MAX_HALVINGS_OF_A_STEP => {
+                halves(scheme, model, state, level + 1, deepest)?
+            }
+            other => other?,
+        }
+    }
+    Ok(())
 }
 
 /// Solver state for `M a + D (v̂ + c_v a) + f_int(q̂ + c_q a) = f_ext`.
@@ -334,6 +506,7 @@ impl ImplicitCore {
             time: t_new,
             iterations: self.newton.max_iterations,
             residual: last,
+            halvings: 0,
         })
     }
 

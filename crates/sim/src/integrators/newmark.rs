@@ -6,12 +6,13 @@
 //! `v_{n+1} = v_n + Δt ((1 − γ) a_n + γ a_{n+1})`,
 //! and `a_{n+1}` from the equation of motion at `t_{n+1}`. Linear models factor
 //! `M + γΔt D + βΔt² K` once; nonlinear models run Newton on the tangent each step (see
-//! [`super::implicit`]). Second order, unconditionally stable, and for D = 0 it conserves the
+//! [`super::implicit`]), and a step on which Newton fails is taken in halves
+//! ([`super::implicit`]'s step halving). Second order, unconditionally stable, and for D = 0 it conserves the
 //! energy `½vᵀMv + ½(q − q_rest)ᵀK(q − q_rest)` of a linear model exactly (up to round-off).
 
 use nurbspring_linalg::SpdSolver;
 
-use super::implicit::ImplicitCore;
+use super::implicit::{CoreLadder, HalvableStep, step_with_halving};
 use super::{NewtonSettings, check_fixed_dt};
 use crate::{DynamicModel, SimError, State};
 
@@ -21,7 +22,7 @@ const GAMMA: f64 = 0.5;
 /// Newmark average-acceleration stepper.
 pub struct Newmark {
     dt: f64,
-    core: ImplicitCore,
+    cores: CoreLadder,
     a: Vec<f64>,
     a_new: Vec<f64>,
     q_hat: Vec<f64>,
@@ -61,11 +62,11 @@ impl Newmark {
         newton: NewtonSettings,
     ) -> Result<Self, SimError> {
         let n = model.n_dofs();
-        let core = ImplicitCore::new("newmark", model, BETA * dt * dt, GAMMA * dt, newton)?;
+        let cores = CoreLadder::new("newmark", model, dt, coefficients, newton)?;
         let a = initial_acceleration(model, initial)?;
         Ok(Self {
             dt,
-            core,
+            cores,
             a_new: a.clone(),
             a,
             q_hat: vec![0.0; n],
@@ -74,9 +75,56 @@ impl Newmark {
         })
     }
 
-    /// How many Newton matrices were factored and Newton iterations run so far.
+    /// How many Newton matrices were factored, Newton iterations run and steps halved so far.
     pub fn newton_counts(&self) -> super::NewtonCounts {
-        self.core.counts
+        self.cores.counts()
+    }
+}
+
+/// `(c_q, c_v) = (βh², γh)`.
+fn coefficients(h: f64) -> (f64, f64) {
+    (BETA * h * h, GAMMA * h)
+}
+
+impl HalvableStep for Newmark {
+    fn substep(
+        &mut self,
+        model: &dyn DynamicModel,
+        state: &mut State,
+        level: u32,
+    ) -> Result<(), SimError> {
+        let dt = self.cores.h(level);
+        for i in 0..state.q.len() {
+            self.q_hat[i] = state.q[i] + dt * state.v[i] + (0.5 - BETA) * dt * dt * self.a[i];
+            self.v_hat[i] = state.v[i] + (1.0 - GAMMA) * dt * self.a[i];
+        }
+        self.a_new.copy_from_slice(&self.a);
+        let t_new = state.t + dt;
+        let core = self.cores.core(model, level)?;
+        core.solve(
+            model,
+            &state.q,
+            &self.q_hat,
+            &self.v_hat,
+            t_new,
+            &mut self.a_new,
+            self.steps,
+        )?;
+        for i in 0..state.q.len() {
+            state.q[i] = self.q_hat[i] + core.cq * self.a_new[i];
+            state.v[i] = self.v_hat[i] + core.cv * self.a_new[i];
+        }
+        std::mem::swap(&mut self.a, &mut self.a_new);
+        state.t = t_new;
+        Ok(())
+    }
+
+    fn carried(&mut self) -> &mut Vec<f64> {
+        &mut self.a
+    }
+
+    fn ladder(&mut self) -> &mut CoreLadder {
+        &mut self.cores
     }
 }
 
@@ -89,27 +137,6 @@ impl super::Stepper for Newmark {
     ) -> Result<(), SimError> {
         check_fixed_dt("newmark", self.dt, dt)?;
         self.steps += 1;
-        for i in 0..state.q.len() {
-            self.q_hat[i] = state.q[i] + dt * state.v[i] + (0.5 - BETA) * dt * dt * self.a[i];
-            self.v_hat[i] = state.v[i] + (1.0 - GAMMA) * dt * self.a[i];
-        }
-        self.a_new.copy_from_slice(&self.a);
-        let t_new = state.t + dt;
-        self.core.solve(
-            model,
-            &state.q,
-            &self.q_hat,
-            &self.v_hat,
-            t_new,
-            &mut self.a_new,
-            self.steps,
-        )?;
-        for i in 0..state.q.len() {
-            state.q[i] = self.q_hat[i] + self.core.cq * self.a_new[i];
-            state.v[i] = self.v_hat[i] + self.core.cv * self.a_new[i];
-        }
-        std::mem::swap(&mut self.a, &mut self.a_new);
-        state.t = t_new;
-        Ok(())
+        step_with_halving(self, model, state)
     }
 }
