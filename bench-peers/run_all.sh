@@ -52,7 +52,7 @@ section() {  # name, command...
   l0=$(load)
   echo "==== $name ($start UTC, load $l0)"
   "$@"
-  printf '%s\t%s\t%s\t%s\t%s\n' "$name" "$start" "$(stamp)" "$l0" "$(load)" >>"$RESULTS/sections.tsv"
+  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$start" "$(stamp)" "$l0" "$(load)" "$(date -u +%F)" >>"$RESULTS/sections.tsv"
 }
 run_start=$(stamp)
 load_start=$(load)
@@ -98,8 +98,10 @@ cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.start
 mem = next(int(l.split()[1]) for l in open("/proc/meminfo") if l.startswith("MemTotal"))
 sections = {}
 for line in open(os.path.join(d, "sections.tsv")):
-    name, start, end, l0, l1 = line.rstrip("\n").split("\t")
-    sections[name] = {"start": start, "end": end, "load_start": float(l0), "load_end": float(l1)}
+    # name, start, end, loads and (since 2026-12-04) the UTC date the section ended
+    name, start, end, l0, l1, *day = line.rstrip("\n").split("\t")
+    sections[name] = {"start": start, "end": end, "load_start": float(l0), "load_end": float(l1),
+                      "date": day[0] if day else None}
 info = {"date": time.strftime("%Y-%m-%d", time.gmtime()), "start": os.environ["RUN_START"],
         "end": os.environ["RUN_END"], "load_start": float(os.environ["LOAD_START"]),
         "load_end": float(os.environ["LOAD_END"]), "cpu": f'"{cpu}"', "cpus": os.cpu_count(),
