@@ -6,7 +6,8 @@
 //! reference measurement.
 //!
 //! Run: `cargo run --release -p nurbspring-msm --example step_blocks` (threads:
-//! `RAYON_NUM_THREADS`).
+//! `RAYON_NUM_THREADS`; `ONLY=fused` or `ONLY=generic` times one of the two, for A/B runs of
+//! two builds in turn).
 
 use std::time::Instant;
 
@@ -87,6 +88,9 @@ fn main() {
         ("fused", &model as &dyn DynamicModel),
         ("generic", &generic as &dyn DynamicModel),
     ] {
+        if std::env::var("ONLY").is_ok_and(|only| only != name) {
+            continue;
+        }
         let mut s = state.clone();
         let mut stepper = make_stepper(IntegratorKind::SymplecticEuler, m, &s, dt).unwrap();
         for _ in 0..50 {
