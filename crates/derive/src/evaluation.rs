@@ -162,6 +162,7 @@ pub fn validation(
         dnurbs_energy_drift: energy_drift(reference),
         msm_energy_drift: energy_drift(msm),
         msm_stopped: msm.stopped.clone(),
+        msm_halved_steps: msm.halved_steps,
         probes,
     }
 }
@@ -788,6 +789,7 @@ mod tests {
             dnurbs_energy_drift: None,
             msm_energy_drift: None,
             msm_stopped: None,
+            msm_halved_steps: 0,
             probes: Vec::new(),
         }
     }

@@ -114,6 +114,10 @@ pub struct Validation {
     /// Why the MSM run stopped early, if it did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub msm_stopped: Option<String>,
+    /// Steps of the MSM's implicit integrator taken in halves after Newton failed on them
+    /// (absent when none was).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub msm_halved_steps: usize,
     /// Every probe.
     pub probes: Vec<ProbeError>,
 }
@@ -321,4 +325,9 @@ pub struct ExcitationReport {
     pub mass_scale: f64,
     /// Explicit step limit `2/ω_max` of the modal fit and of this one.
     pub dt_critical: (f64, f64),
+}
+
+/// For `skip_serializing_if`: a count that is zero is left out of the report.
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }

@@ -119,7 +119,10 @@ pub fn record_noted(
     let (mut traj, outcome) = record(watched, initial, opts, Recording::default(), &mut |_, _| {});
     match outcome {
         Ok(summary) if summary.cancelled => Err(DeriveError::Cancelled),
-        Ok(_) => Ok(traj),
+        Ok(summary) => {
+            traj.halved_steps = summary.halved_steps;
+            Ok(traj)
+        }
         Err(e) if is_stop(&e) => {
             traj.stopped = Some(e.to_string());
             Ok(traj)

@@ -15,6 +15,8 @@ pub struct Trajectory {
     pub energy: Vec<[f64; 3]>,
     /// Set when the run stopped early (diverged, unstable or cancelled), with the reason.
     pub stopped: Option<String>,
+    /// Steps of an implicit integrator taken in halves after Newton failed on them.
+    pub halved_steps: usize,
 }
 
 impl Trajectory {
@@ -25,6 +27,7 @@ impl Trajectory {
             probes: vec![Vec::new(); n_probes],
             energy: Vec::new(),
             stopped: None,
+            halved_steps: 0,
         }
     }
 

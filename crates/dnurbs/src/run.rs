@@ -113,6 +113,7 @@ impl DnurbsModel {
             cancelled: false,
             omega_max: None,
             dt_critical: None,
+            halved_steps: 0,
         };
         let dt = opts.dt;
         let mut stepper = RationalStepper::new(self, initial, dt)?;

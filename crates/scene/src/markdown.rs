@@ -356,7 +356,7 @@ pub fn verdict_table(report: &PaperReport) -> String {
             fmt_period(d.dnurbs_period),
             fmt_period(d.msm_period),
             if d.msm_stopped.is_some() {
-                "  (MSM run stopped: diverged)"
+                "  (MSM run stopped early)"
             } else {
                 ""
             }

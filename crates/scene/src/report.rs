@@ -529,6 +529,7 @@ mod tests {
             probes: vec![],
             energy: vec![[4.0, 0.0, 0.0], [1.0, 2.0, -1.0], [0.0, 5.0, -2.0]],
             stopped: None,
+            halved_steps: 0,
         };
         let s = energy_series("MSM", &traj);
         assert_eq!(s[0].name, "MSM total (kinetic + elastic + load)");

@@ -245,6 +245,9 @@ pub struct RunSummary {
     pub omega_max: Option<f64>,
     /// `2/ω_max` (explicit schemes only).
     pub dt_critical: Option<f64>,
+    /// Steps taken in halves after Newton failed on them (implicit schemes only; see
+    /// [`crate::integrators::Stepper::halved_steps`]).
+    pub halved_steps: usize,
 }
 
 /// The largest angular frequency of the model linearized at a state and the explicit stability
@@ -561,6 +564,7 @@ pub fn simulate(
         cancelled: false,
         omega_max,
         dt_critical,
+        halved_steps: 0,
     };
     for k in 1..=n_steps {
         if opts
@@ -595,6 +599,7 @@ pub fn simulate(
         });
         summary.steps = k;
         summary.t_final = state.t;
+        summary.halved_steps = stepper.halved_steps();
     }
     Ok(summary)
 }

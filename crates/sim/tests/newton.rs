@@ -471,3 +471,53 @@ fn a_step_whose_halves_fail_too_reports_the_whole_step_and_leaves_the_state() {
         assert_eq!((&s.q, &s.v, s.t), (&start.q, &start.v, start.t), "{name}");
     }
 }
+
+/// A run reports its halved steps: the stiff Duffing chain of the halving test under Newmark
+/// with a 5-iteration Newton limit halves some of its steps and still reaches `t_end` on the
+/// grid of Δt, with the count the stepper keeps; the default limit of 30 halves none; an
+/// explicit run reports none either.
+#[test]
+fn a_run_reports_how_many_of_its_steps_were_halved() {
+    let c = Chain {
+        n: 4,
+        k: 2.0,
+        m: 1.0,
+    };
+    let model = Duffing::new(&c, 50.0);
+    let start = State::new(vec![0.8, -0.6, 0.7, 0.5], vec![0.0; 4]);
+    let run = |kind: IntegratorKind, dt: f64, iterations: usize| {
+        let mut opts = RunOptions::new(dt, 2.0, kind);
+        opts.max_newton_iterations = iterations;
+        let mut times = Vec::new();
+        let summary = simulate(&model, start.clone(), &opts, &mut |s: &Sample<'_>| {
+            times.push(s.t)
+        })
+        .unwrap();
+        (summary, times)
+    };
+    let (summary, times) = run(IntegratorKind::Newmark, 0.2, 5);
+    assert!(summary.halved_steps >= 1, "{summary:?}");
+    assert_eq!(summary.steps, 10);
+    assert_eq!(times.len(), 11);
+    for (k, t) in times.iter().enumerate() {
+        assert_eq!(*t, k as f64 * 0.2);
+    }
+    // The count is the stepper's: the same steps one by one.
+    let newton = NewtonSettings {
+        tolerance: RunOptions::new(0.2, 2.0, IntegratorKind::Newmark).newton_tolerance,
+        max_iterations: 5,
+    };
+    let mut nm = Newmark::new(&model, &start, 0.2, newton).unwrap();
+    let mut s = start.clone();
+    for _ in 0..10 {
+        nm.step(&model, &mut s, 0.2).unwrap();
+    }
+    assert_eq!(nm.newton_counts().halved_steps, summary.halved_steps);
+    assert_eq!(run(IntegratorKind::Newmark, 0.2, 30).0.halved_steps, 0);
+    assert_eq!(
+        run(IntegratorKind::SymplecticEuler, 0.01, 30)
+            .0
+            .halved_steps,
+        0
+    );
+}

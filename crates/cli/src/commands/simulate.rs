@@ -172,6 +172,7 @@ pub fn run_summary(
         "t_end": simulated.t_end,
         "steps": summary.steps,
         "t_final": summary.t_final,
+        "halved_steps": summary.halved_steps,
         "samples": simulated.trajectory.t.len(),
         "frames": simulated.frames.len(),
         "pvd": simulated.pvd,

@@ -107,4 +107,8 @@ impl super::Stepper for BackwardEuler {
         self.steps += 1;
         step_with_halving(self, model, state)
     }
+
+    fn halved_steps(&self) -> usize {
+        self.cores.counts().halved_steps
+    }
 }

@@ -47,6 +47,12 @@ pub trait Stepper {
         state: &mut State,
         dt: f64,
     ) -> Result<(), SimError>;
+
+    /// Steps so far that were taken in halves after Newton failed on them (the implicit
+    /// schemes' step halving; 0 for the others).
+    fn halved_steps(&self) -> usize {
+        0
+    }
 }
 
 /// Builds the stepper of `kind` for `model`, starting from `initial`, with step `dt` and the

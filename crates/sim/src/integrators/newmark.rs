@@ -139,4 +139,8 @@ impl super::Stepper for Newmark {
         self.steps += 1;
         step_with_halving(self, model, state)
     }
+
+    fn halved_steps(&self) -> usize {
+        self.cores.counts().halved_steps
+    }
 }
