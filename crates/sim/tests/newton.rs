@@ -218,13 +218,9 @@ fn the_projected_tangent_is_not_used_while_the_newton_matrix_is_positive_definit
     assert_eq!(model.projections.load(Ordering::Relaxed), 0);
 }
 
-/// When Newton gives up, the error reports the relative residual `|R| / max(|M a|, |f_int|,
-/// |f_ext|)` of its last iterate. With no iteration allowed that is the starting point of the
-/// first backward Euler step from rest, a = 0 (the guess and the acceleration that keeps q
-/// coincide), where `R = f_int(q₀) − f`, by hand on a two-mass Duffing chain
-/// (k = 1, ε = 1): `f_int(0.5, −0.25) = (1.375, −1.015625)`, `f = (0.1, 0.3)`.
-#[test]
-fn a_newton_failure_reports_the_relative_residual_of_the_last_iterate() {
+/// Two masses on a Duffing chain (k = 1, ε = 1, m = 1) with loads (0.1, 0.3), and Newton
+/// settings that allow no iteration (tolerance 1e-10): every implicit step fails.
+fn loaded_pair_without_iterations() -> (Duffing, NewtonSettings) {
     let c = Chain {
         n: 2,
         k: 1.0,
@@ -236,6 +232,28 @@ fn a_newton_failure_reports_the_relative_residual_of_the_last_iterate() {
         tolerance: 1e-10,
         max_iterations: 0,
     };
+    (model, newton)
+}
+
+/// A stiff Duffing chain (4 masses, k = 2, ε = 50, m = 1) at rest far from equilibrium.
+fn stiff_duffing_chain() -> (Duffing, State) {
+    let c = Chain {
+        n: 4,
+        k: 2.0,
+        m: 1.0,
+    };
+    let start = State::new(vec![0.8, -0.6, 0.7, 0.5], vec![0.0; 4]);
+    (Duffing::new(&c, 50.0), start)
+}
+
+/// When Newton gives up, the error reports the relative residual `|R| / max(|M a|, |f_int|,
+/// |f_ext|)` of its last iterate. With no iteration allowed that is the starting point of the
+/// first backward Euler step from rest, a = 0 (the guess and the acceleration that keeps q
+/// coincide), where `R = f_int(q₀) − f`, by hand on a two-mass Duffing chain
+/// (k = 1, ε = 1): `f_int(0.5, −0.25) = (1.375, −1.015625)`, `f = (0.1, 0.3)`.
+#[test]
+fn a_newton_failure_reports_the_relative_residual_of_the_last_iterate() {
+    let (model, newton) = loaded_pair_without_iterations();
     let mut be = BackwardEuler::new(&model, 0.1, newton).unwrap();
     let mut s = State::new(vec![0.5, -0.25], vec![0.0, 0.0]);
     let r2 = 1.275f64.powi(2) + 1.315625f64.powi(2);
@@ -372,13 +390,7 @@ fn newton_steps_that_lower_the_residual_are_taken_whole() {
 /// same operations from the same state and guess), while the time lands exactly on `Δt`.
 #[test]
 fn a_step_on_which_newton_fails_is_two_steps_of_half_the_size() {
-    let c = Chain {
-        n: 4,
-        k: 2.0,
-        m: 1.0,
-    };
-    let model = Duffing::new(&c, 50.0);
-    let start = State::new(vec![0.8, -0.6, 0.7, 0.5], vec![0.0; 4]);
+    let (model, start) = stiff_duffing_chain();
     let newton = NewtonSettings {
         tolerance: 1e-10,
         max_iterations: 5,
@@ -430,17 +442,7 @@ fn a_step_on_which_newton_fails_is_two_steps_of_half_the_size() {
 /// was, bit for bit, for both schemes.
 #[test]
 fn a_step_whose_halves_fail_too_reports_the_whole_step_and_leaves_the_state() {
-    let c = Chain {
-        n: 2,
-        k: 1.0,
-        m: 1.0,
-    };
-    let mut model = Duffing::new(&c, 1.0);
-    model.force = vec![0.1, 0.3];
-    let newton = NewtonSettings {
-        tolerance: 1e-10,
-        max_iterations: 0,
-    };
+    let (model, newton) = loaded_pair_without_iterations();
     let start = State::new(vec![0.5, -0.25], vec![0.1, 0.0]);
     let mut be = BackwardEuler::new(&model, 0.1, newton).unwrap();
     let mut nm = Newmark::new(&model, &start, 0.1, newton).unwrap();
@@ -478,13 +480,7 @@ fn a_step_whose_halves_fail_too_reports_the_whole_step_and_leaves_the_state() {
 /// explicit run reports none either.
 #[test]
 fn a_run_reports_how_many_of_its_steps_were_halved() {
-    let c = Chain {
-        n: 4,
-        k: 2.0,
-        m: 1.0,
-    };
-    let model = Duffing::new(&c, 50.0);
-    let start = State::new(vec![0.8, -0.6, 0.7, 0.5], vec![0.0; 4]);
+    let (model, start) = stiff_duffing_chain();
     let run = |kind: IntegratorKind, dt: f64, iterations: usize| {
         let mut opts = RunOptions::new(dt, 2.0, kind);
         opts.max_newton_iterations = iterations;

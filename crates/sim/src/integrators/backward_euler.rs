@@ -10,19 +10,17 @@
 //! which Newton fails is taken in halves ([`super::implicit`]'s step halving).
 //! First order, unconditionally stable, numerically dissipative.
 
-use super::implicit::{CoreLadder, HalvableStep, step_with_halving};
-use super::{NewtonSettings, check_fixed_dt};
+use super::NewtonSettings;
+use super::implicit::{CoreLadder, HalvableStep};
 use crate::{DynamicModel, SimError, State};
 
 /// Backward Euler stepper.
 pub struct BackwardEuler {
-    dt: f64,
     cores: CoreLadder,
     /// The last step's acceleration, the Newton initial guess.
     a: Vec<f64>,
     a_new: Vec<f64>,
     q_hat: Vec<f64>,
-    steps: usize,
 }
 
 impl BackwardEuler {
@@ -35,12 +33,10 @@ impl BackwardEuler {
         let n = model.n_dofs();
         let cores = CoreLadder::new("backward-euler", model, dt, coefficients, newton)?;
         Ok(Self {
-            dt,
             cores,
             a: vec![0.0; n],
             a_new: vec![0.0; n],
             q_hat: vec![0.0; n],
-            steps: 0,
         })
     }
 
@@ -62,7 +58,7 @@ impl HalvableStep for BackwardEuler {
         state: &mut State,
         level: u32,
     ) -> Result<(), SimError> {
-        let dt = self.cores.h(level);
+        let (dt, step) = (self.cores.h(level), self.cores.steps);
         for i in 0..state.q.len() {
             self.q_hat[i] = state.q[i] + dt * state.v[i];
         }
@@ -76,7 +72,7 @@ impl HalvableStep for BackwardEuler {
             &state.v,
             t_new,
             &mut self.a_new,
-            self.steps,
+            step,
         )?;
         std::mem::swap(&mut self.a, &mut self.a_new);
         for i in 0..state.q.len() {
@@ -91,24 +87,11 @@ impl HalvableStep for BackwardEuler {
         &mut self.a
     }
 
-    fn ladder(&mut self) -> &mut CoreLadder {
+    fn ladder(&self) -> &CoreLadder {
+        &self.cores
+    }
+
+    fn ladder_mut(&mut self) -> &mut CoreLadder {
         &mut self.cores
-    }
-}
-
-impl super::Stepper for BackwardEuler {
-    fn step(
-        &mut self,
-        model: &dyn DynamicModel,
-        state: &mut State,
-        dt: f64,
-    ) -> Result<(), SimError> {
-        check_fixed_dt("backward-euler", self.dt, dt)?;
-        self.steps += 1;
-        step_with_halving(self, model, state)
-    }
-
-    fn halved_steps(&self) -> usize {
-        self.cores.counts().halved_steps
     }
 }

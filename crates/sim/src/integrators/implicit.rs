@@ -41,7 +41,7 @@
 
 use nurbspring_linalg::{LinalgError, LuSolver, ShiftedSum, SparseMatrix, SpdSolver};
 
-use super::{NewtonSettings, norm};
+use super::{NewtonSettings, check_fixed_dt, norm};
 use crate::{DynamicModel, SimError, State};
 
 /// Factorization of a Newton matrix: Cholesky when possible, LU fallback.
@@ -155,6 +155,8 @@ pub(crate) struct CoreLadder {
     coefficients: fn(f64) -> (f64, f64),
     newton: NewtonSettings,
     cores: Vec<ImplicitCore>,
+    /// Steps begun (whole steps of `dt`; the step number in error reports).
+    pub(crate) steps: usize,
     halved_steps: usize,
 }
 
@@ -175,6 +177,7 @@ impl CoreLadder {
             coefficients,
             newton,
             cores: vec![core],
+            steps: 0,
             halved_steps: 0,
         })
     }
@@ -228,7 +231,28 @@ pub(crate) trait HalvableStep {
     /// saved before a halved step and restored when it fails.
     fn carried(&mut self) -> &mut Vec<f64>;
 
-    fn ladder(&mut self) -> &mut CoreLadder;
+    fn ladder(&self) -> &CoreLadder;
+
+    fn ladder_mut(&mut self) -> &mut CoreLadder;
+}
+
+/// Every halvable scheme is a stepper of its fixed `Δt`: a step is [`step_with_halving`].
+impl<T: HalvableStep> super::Stepper for T {
+    fn step(
+        &mut self,
+        model: &dyn DynamicModel,
+        state: &mut State,
+        dt: f64,
+    ) -> Result<(), SimError> {
+        let ladder = self.ladder_mut();
+        check_fixed_dt(ladder.name, ladder.dt, dt)?;
+        ladder.steps += 1;
+        step_with_halving(self, model, state)
+    }
+
+    fn halved_steps(&self) -> usize {
+        self.ladder().halved_steps
+    }
 }
 
 /// One step of `Δt`. When Newton fails on it, the step is taken as two steps of `Δt/2`, each of
@@ -253,7 +277,7 @@ pub(crate) fn step_with_halving(
         Ok(()) => {
             // The time of the whole step, as an unhalved step computes it.
             state.t = t_end;
-            scheme.ladder().halved_steps += 1;
+            scheme.ladder_mut().halved_steps += 1;
             Ok(())
         }
         Err(_) => {

@@ -12,8 +12,8 @@
 
 use nurbspring_linalg::SpdSolver;
 
-use super::implicit::{CoreLadder, HalvableStep, step_with_halving};
-use super::{NewtonSettings, check_fixed_dt};
+use super::NewtonSettings;
+use super::implicit::{CoreLadder, HalvableStep};
 use crate::{DynamicModel, SimError, State};
 
 const BETA: f64 = 0.25;
@@ -21,13 +21,11 @@ const GAMMA: f64 = 0.5;
 
 /// Newmark average-acceleration stepper.
 pub struct Newmark {
-    dt: f64,
     cores: CoreLadder,
     a: Vec<f64>,
     a_new: Vec<f64>,
     q_hat: Vec<f64>,
     v_hat: Vec<f64>,
-    steps: usize,
 }
 
 /// `M⁻¹ (f_ext(t) − f_int(q) − D v)`: the acceleration of the equation of motion.
@@ -65,13 +63,11 @@ impl Newmark {
         let cores = CoreLadder::new("newmark", model, dt, coefficients, newton)?;
         let a = initial_acceleration(model, initial)?;
         Ok(Self {
-            dt,
             cores,
             a_new: a.clone(),
             a,
             q_hat: vec![0.0; n],
             v_hat: vec![0.0; n],
-            steps: 0,
         })
     }
 
@@ -93,7 +89,7 @@ impl HalvableStep for Newmark {
         state: &mut State,
         level: u32,
     ) -> Result<(), SimError> {
-        let dt = self.cores.h(level);
+        let (dt, step) = (self.cores.h(level), self.cores.steps);
         for i in 0..state.q.len() {
             self.q_hat[i] = state.q[i] + dt * state.v[i] + (0.5 - BETA) * dt * dt * self.a[i];
             self.v_hat[i] = state.v[i] + (1.0 - GAMMA) * dt * self.a[i];
@@ -108,7 +104,7 @@ impl HalvableStep for Newmark {
             &self.v_hat,
             t_new,
             &mut self.a_new,
-            self.steps,
+            step,
         )?;
         for i in 0..state.q.len() {
             state.q[i] = self.q_hat[i] + core.cq * self.a_new[i];
@@ -123,24 +119,11 @@ impl HalvableStep for Newmark {
         &mut self.a
     }
 
-    fn ladder(&mut self) -> &mut CoreLadder {
+    fn ladder(&self) -> &CoreLadder {
+        &self.cores
+    }
+
+    fn ladder_mut(&mut self) -> &mut CoreLadder {
         &mut self.cores
-    }
-}
-
-impl super::Stepper for Newmark {
-    fn step(
-        &mut self,
-        model: &dyn DynamicModel,
-        state: &mut State,
-        dt: f64,
-    ) -> Result<(), SimError> {
-        check_fixed_dt("newmark", self.dt, dt)?;
-        self.steps += 1;
-        step_with_halving(self, model, state)
-    }
-
-    fn halved_steps(&self) -> usize {
-        self.cores.counts().halved_steps
     }
 }
