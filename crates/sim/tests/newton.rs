@@ -474,6 +474,69 @@ fn a_step_whose_halves_fail_too_reports_the_whole_step_and_leaves_the_state() {
     }
 }
 
+/// A step whose halves fail after the first of them succeeded leaves the carried state too as
+/// it was: a Duffing chain at rest under a small load that jumps to a large one after
+/// `t = 0.05`, one Newton iteration allowed, Δt = 0.1. The whole step fails (the large load),
+/// its first half (the small load) converges and moves Newmark's acceleration and backward
+/// Euler's guess, its second half fails at every halving. Stepped on after the error with
+/// the load kept small, each scheme must go on as a fresh one from the start, to the
+/// round-off of the Newton factor the failed attempts left behind (a kept factor is only an
+/// approximation of the Jacobian, by design): about 1e-12 of the motion. An acceleration left
+/// at the first half's end would move Newmark's predictor by `Δt²/4 Δa`, about 1e-3 of the
+/// motion here; backward Euler's guess only moves Newton's start, within its tolerance.
+#[test]
+fn a_failed_step_leaves_no_trace_in_what_the_scheme_carries() {
+    let c = Chain {
+        n: 3,
+        k: 1.0,
+        m: 1.0,
+    };
+    let mut jump = Duffing::new(&c, 50.0);
+    jump.force = vec![1e-3, -2e-3, 1.5e-3];
+    jump.force_after = Some((0.05, vec![4e3, -3e3, 5e3]));
+    let mut small = Duffing::new(&c, 50.0);
+    small.force = jump.force.clone();
+    let newton = NewtonSettings {
+        tolerance: 1e-10,
+        max_iterations: 1,
+    };
+    let start = State::new(vec![0.0; 3], vec![0.0; 3]);
+    let dt = 0.1;
+    let schemes = |_: ()| -> [(&str, Box<dyn Stepper>); 2] {
+        [
+            (
+                "backward Euler",
+                Box::new(BackwardEuler::new(&jump, dt, newton).unwrap()),
+            ),
+            (
+                "Newmark",
+                Box::new(Newmark::new(&jump, &start, dt, newton).unwrap()),
+            ),
+        ]
+    };
+    for ((name, mut failed), (_, mut fresh)) in schemes(()).into_iter().zip(schemes(())) {
+        let mut s = start.clone();
+        match failed.step(&jump, &mut s, dt) {
+            Err(SimError::NewtonFailed { halvings, .. }) => assert_eq!(halvings, 6, "{name}"),
+            other => panic!("{name}: expected NewtonFailed, got {other:?}"),
+        }
+        assert_eq!((&s.q, &s.v, s.t), (&start.q, &start.v, start.t), "{name}");
+        let mut t = start.clone();
+        for _ in 0..3 {
+            failed.step(&small, &mut s, dt).unwrap();
+            fresh.step(&small, &mut t, dt).unwrap();
+        }
+        let scale = t.q.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        let vscale = t.v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        assert!(
+            max_abs_diff(&s.q, &t.q) <= 1e-10 * scale && max_abs_diff(&s.v, &t.v) <= 1e-10 * vscale,
+            "{name}: q {:?} against {:?}",
+            s.q,
+            t.q
+        );
+    }
+}
+
 /// A run reports its halved steps: the stiff Duffing chain of the halving test under Newmark
 /// with a 5-iteration Newton limit halves some of its steps and still reaches `t_end` on the
 /// grid of Δt, with the count the stepper keeps; the default limit of 30 halves none; an

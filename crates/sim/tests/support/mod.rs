@@ -128,13 +128,16 @@ pub fn initial_velocities(n: usize) -> Vec<f64> {
 
 /// A Duffing chain: the linear chain plus a cubic grounding spring at every mass,
 /// `f_int(q) = K q + ε q³`, `K_T = K + diag(3ε q²)`, `E = ½qᵀKq + ¼ε Σ q⁴`; optional diagonal
-/// damping and a constant load. Nonlinear: `linear_stiffness()` is `None`.
+/// damping and a load, constant or switched to another at a time `t₁` (`t > t₁`). Nonlinear:
+/// `linear_stiffness()` is `None`.
 pub struct Duffing {
     pub k: SparseMatrix,
     pub epsilon: f64,
     pub mass: SystemMatrix,
     pub damping: Option<SystemMatrix>,
     pub force: Vec<f64>,
+    /// `(t₁, load after t₁)`.
+    pub force_after: Option<(f64, Vec<f64>)>,
 }
 
 impl Duffing {
@@ -145,6 +148,14 @@ impl Duffing {
             mass: SystemMatrix::Diagonal(vec![chain.m; chain.n]),
             damping: None,
             force: vec![0.0; chain.n],
+            force_after: None,
+        }
+    }
+
+    fn load(&self, t: f64) -> &[f64] {
+        match &self.force_after {
+            Some((t1, after)) if t > *t1 => after,
+            _ => &self.force,
         }
     }
 }
@@ -165,8 +176,8 @@ impl DynamicModel for Duffing {
             *o += self.epsilon * x * x * x;
         }
     }
-    fn external_force(&self, _t: f64, out: &mut [f64]) {
-        out.copy_from_slice(&self.force);
+    fn external_force(&self, t: f64, out: &mut [f64]) {
+        out.copy_from_slice(self.load(t));
     }
     fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
         let d: Vec<f64> = q.iter().map(|x| 3.0 * self.epsilon * x * x).collect();
@@ -177,8 +188,8 @@ impl DynamicModel for Duffing {
         0.5 * self.k.quadratic_form(q)
             + 0.25 * self.epsilon * q.iter().map(|x| x.powi(4)).sum::<f64>()
     }
-    fn external_potential(&self, _t: f64, q: &[f64]) -> f64 {
-        -q.iter().zip(&self.force).map(|(a, b)| a * b).sum::<f64>()
+    fn external_potential(&self, t: f64, q: &[f64]) -> f64 {
+        -q.iter().zip(self.load(t)).map(|(a, b)| a * b).sum::<f64>()
     }
 }
 
