@@ -220,7 +220,10 @@ fn tridiagonal_eigenvalue(d: &[f64], e: &[f64], k: usize) -> f64 {
 
 /// `K φ = λ M φ` with K symmetric and M symmetric positive definite, by Cholesky reduction:
 /// `M = L Lᵀ`, `C = L⁻¹ K L⁻ᵀ = Y Λ Yᵀ`, `φ = L⁻ᵀ Y` (Golub & Van Loan §8.7.2). Eigenvalues
-/// ascending; eigenvectors M-orthonormal (`ΦᵀMΦ = I`).
+/// ascending; eigenvectors M-orthonormal (`ΦᵀMΦ = I`). A diagonal M (a lumped mass) has
+/// `L = diag(√m_i)`: C and Φ are then scaled entry by entry, the eigen-decomposition of C
+/// being the only `O(n³)` work (the general reduction adds a Cholesky factorization and three
+/// triangular solves, about as much again).
 ///
 /// ```
 /// use nurbspring_linalg::{generalized_symmetric_eigen, DenseMatrix};
@@ -249,6 +252,9 @@ pub fn generalized_symmetric_eigen(
             vectors: DenseMatrix::zeros(0, 0),
         });
     }
+    if let Some(d) = diagonal(m) {
+        return diagonal_reduction(k, &d);
+    }
     let llt = dense_ref(m)
         .llt(Side::Lower)
         .map_err(|e| LinalgError::NotPositiveDefinite {
@@ -263,6 +269,43 @@ pub fn generalized_symmetric_eigen(
     let (values, mut y) = faer_evd(&sym, "generalized_symmetric_eigen")?;
     l.transpose().solve_upper_triangular_in_place(y.as_mut()); // φ = L⁻ᵀ Y
     let mut vectors = from_faer(y.as_ref());
+    normalize_signs(&mut vectors);
+    Ok(SymmetricEigen { values, vectors })
+}
+
+/// The diagonal of `m` when every entry off it is zero.
+fn diagonal(m: &DenseMatrix) -> Option<Vec<f64>> {
+    let n = m.nrows();
+    for j in 0..n {
+        for i in 0..n {
+            if i != j && m[(i, j)] != 0.0 {
+                return None;
+            }
+        }
+    }
+    Some((0..n).map(|i| m[(i, i)]).collect())
+}
+
+/// [`generalized_symmetric_eigen`] for `M = diag(d)`: `L = diag(√d)`, the same reduction
+/// written entry by entry.
+fn diagonal_reduction(k: &DenseMatrix, d: &[f64]) -> Result<SymmetricEigen, LinalgError> {
+    // The entries are finite (checked by the caller).
+    if let Some(i) = d.iter().position(|&x| x <= 0.0) {
+        return Err(LinalgError::NotPositiveDefinite {
+            detail: format!(
+                "Cholesky of the mass matrix M: diagonal entry {i} is {}, not positive",
+                d[i]
+            ),
+        });
+    }
+    let n = d.len();
+    let l: Vec<f64> = d.iter().map(|x| x.sqrt()).collect();
+    let sym = Mat::from_fn(n, n, |i, j| {
+        let kij = 0.5 * (k[(i, j)] + k[(j, i)]);
+        kij / l[i] / l[j]
+    });
+    let (values, y) = faer_evd(&sym, "generalized_symmetric_eigen")?;
+    let mut vectors = DenseMatrix::from_fn(n, n, |i, j| y[(i, j)] / l[i]);
     normalize_signs(&mut vectors);
     Ok(SymmetricEigen { values, vectors })
 }

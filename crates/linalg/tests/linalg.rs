@@ -425,6 +425,77 @@ fn generalized_eigen_dense_is_analytic_and_m_orthonormal() {
     ));
 }
 
+/// A lumped mass matrix takes the diagonal reduction. Uniform masses m on the string
+/// `K = tridiag(−1, 2, −1)`: `λ_j = (2 − 2 cos(jπ/(n+1)))/m` in closed form. Varying masses:
+/// the same pencil seen through a rotation `Q` (`QᵀKQ`, `QᵀMQ`, no longer diagonal) takes the
+/// Cholesky reduction and must give the same eigenvalues and, mapped back, the same
+/// eigenvectors (`φ = Q φ'`, up to sign) to round-off. A non-positive or non-finite mass is
+/// refused.
+#[test]
+fn generalized_eigen_with_a_lumped_mass_matches_the_closed_form_and_the_cholesky_path() {
+    let n = 25;
+    let k = DenseMatrix::from_fn(n, n, |i, j| match i.abs_diff(j) {
+        0 => 2.0,
+        1 => -1.0,
+        _ => 0.0,
+    });
+    let m = 0.3;
+    let e = generalized_symmetric_eigen(&k, &DenseMatrix::from_fn(n, n, |i, j| {
+        if i == j { m } else { 0.0 }
+    }))
+    .unwrap();
+    for j in 0..n {
+        let c = ((j + 1) as f64 * std::f64::consts::PI / (n as f64 + 1.0)).cos();
+        let exact = (2.0 - 2.0 * c) / m;
+        assert!((e.values[j] - exact).abs() < tol::EIGENVALUE * exact.max(1.0), "{j}");
+    }
+
+    let masses: Vec<f64> = (0..n).map(|i| 1.0 + 0.6 * (i as f64 * 1.3).sin()).collect();
+    let md = DenseMatrix::from_fn(n, n, |i, j| if i == j { masses[i] } else { 0.0 });
+    let lumped = generalized_symmetric_eigen(&k, &md).unwrap();
+    // Q: rotations by 0.4 rad in the planes (i, i + 1), one after another.
+    let mut q = DenseMatrix::identity(n);
+    let (c, s) = (0.4f64.cos(), 0.4f64.sin());
+    for p in 0..n - 1 {
+        for r in 0..n {
+            let (a, b) = (q[(r, p)], q[(r, p + 1)]);
+            q[(r, p)] = c * a - s * b;
+            q[(r, p + 1)] = s * a + c * b;
+        }
+    }
+    let (kq, mq) = (
+        q.transpose().matmul(&k).matmul(&q),
+        q.transpose().matmul(&md).matmul(&q),
+    );
+    assert!(mq[(0, 1)].abs() > 0.01, "the rotated mass is not diagonal");
+    let rotated = generalized_symmetric_eigen(&kq, &mq).unwrap();
+    let back = q.matmul(&rotated.vectors);
+    for j in 0..n {
+        let (a, b) = (lumped.values[j], rotated.values[j]);
+        assert!((a - b).abs() < 1e-12 * a.abs().max(1.0), "λ_{j}: {a} against {b}");
+        let sign = if (0..n).map(|i| lumped.vectors[(i, j)] * back[(i, j)]).sum::<f64>() < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        for i in 0..n {
+            let d = lumped.vectors[(i, j)] - sign * back[(i, j)];
+            assert!(d.abs() < 1e-10, "φ_{j}[{i}]: {d:e}");
+        }
+    }
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let mut mb = md.clone();
+        mb[(3, 3)] = bad;
+        match generalized_symmetric_eigen(&k, &mb) {
+            Err(LinalgError::NotPositiveDefinite { detail }) if bad.is_finite() => {
+                assert!(detail.contains("diagonal entry 3"), "{detail}")
+            }
+            Err(LinalgError::NonFinite { .. }) if !bad.is_finite() => {}
+            other => panic!("mass {bad}: {other:?}"),
+        }
+    }
+}
+
 fn check_sparse_modes(k: &SparseMatrix, m: &SparseMatrix, e: &SymmetricEigen, reference: &[f64]) {
     let n = k.nrows();
     assert_eq!(e.values.len(), reference.len());
