@@ -326,7 +326,11 @@ class Run:
                              ("same, 9² / 17², all candidates", "derive_paper_9_17_c0"),
                              ("same, 17² / 33², all candidates", "derive_paper_17_33_c0"),
                              ("same, 17² / 33², 12 candidates", "derive_paper_17_33_c12"),
-                             ("same, 33² / 65², 12 candidates", "derive_paper_33_65_c12")):
+                             ("same, 33² / 65², 12 candidates", "derive_paper_33_65_c12"),
+                             ("default derivation, 9² cps / 9² lattice", "derive_default_9"),
+                             ("same, 17² / 17²", "derive_default_17"),
+                             ("same, 33² / 33²", "derive_default_33"),
+                             ("same, 65² / 65²", "derive_default_65")):
             bins = [k for k in self.res if k[1] == bench]
             if not bins:
                 rows.append(f"| {label} | not measured | | | |")

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Times `nurbspring paper` and `nurbspring derive SCENE --derivation paper` on refined nets
-# (docs/benchmarks.md, "Derivation: the paper's derivation on refined nets"): BIN (default the
+# Times `nurbspring paper`, `nurbspring derive SCENE --derivation paper` on refined nets and
+# the default derivation on the same sheets (docs/benchmarks.md, "Derivation: the paper's
+# derivation on refined nets"): BIN (default the
 # release build) and, when BASE names another binary, that one in turn with it, each job RUNS
 # times (default 3). With NURBSPRING_BENCH_RESULTS set, every run is also appended to that file
 # as a JSON line (bench-peers/results.py's format) for bench-peers/tables.py.
@@ -45,6 +46,17 @@ for size in "7 9 0" "9 17 0" "17 33 0" "17 33 12" "33 65 12"; do
   for run in $(seq "$RUNS"); do
     for bin in $BIN $BASE; do
       timed "derive_paper_$1_$2_c$3" "$bin" derive "$scene" --derivation paper --out "$dir/out" -q
+    done
+  done
+done
+# The default derivation on the same sheets (lattice as fine as the net): its two dense
+# eigenproblems grow as the cube of the free control points.
+for n in 9 17 33 65; do
+  scene="$dir/default_$n.toml"
+  python3 scripts/bench-derive/paper_sheet.py "$n" "$n" "$scene"
+  for run in $(seq "$RUNS"); do
+    for bin in $BIN $BASE; do
+      timed "derive_default_$n" "$bin" derive "$scene" --out "$dir/out" -q
     done
   done
 done
