@@ -440,14 +440,18 @@ fn generalized_eigen_with_a_lumped_mass_matches_the_closed_form_and_the_cholesky
         _ => 0.0,
     });
     let m = 0.3;
-    let e = generalized_symmetric_eigen(&k, &DenseMatrix::from_fn(n, n, |i, j| {
-        if i == j { m } else { 0.0 }
-    }))
+    let e = generalized_symmetric_eigen(
+        &k,
+        &DenseMatrix::from_fn(n, n, |i, j| if i == j { m } else { 0.0 }),
+    )
     .unwrap();
     for j in 0..n {
         let c = ((j + 1) as f64 * std::f64::consts::PI / (n as f64 + 1.0)).cos();
         let exact = (2.0 - 2.0 * c) / m;
-        assert!((e.values[j] - exact).abs() < tol::EIGENVALUE * exact.max(1.0), "{j}");
+        assert!(
+            (e.values[j] - exact).abs() < tol::EIGENVALUE * exact.max(1.0),
+            "{j}"
+        );
     }
 
     let masses: Vec<f64> = (0..n).map(|i| 1.0 + 0.6 * (i as f64 * 1.3).sin()).collect();
@@ -472,8 +476,15 @@ fn generalized_eigen_with_a_lumped_mass_matches_the_closed_form_and_the_cholesky
     let back = q.matmul(&rotated.vectors);
     for j in 0..n {
         let (a, b) = (lumped.values[j], rotated.values[j]);
-        assert!((a - b).abs() < 1e-12 * a.abs().max(1.0), "λ_{j}: {a} against {b}");
-        let sign = if (0..n).map(|i| lumped.vectors[(i, j)] * back[(i, j)]).sum::<f64>() < 0.0 {
+        assert!(
+            (a - b).abs() < 1e-12 * a.abs().max(1.0),
+            "λ_{j}: {a} against {b}"
+        );
+        let sign = if (0..n)
+            .map(|i| lumped.vectors[(i, j)] * back[(i, j)])
+            .sum::<f64>()
+            < 0.0
+        {
             -1.0
         } else {
             1.0
