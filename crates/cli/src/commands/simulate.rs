@@ -107,6 +107,13 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
     }
     // A failed run leaves the previous one in place (the staged folder is dropped).
     let summary = outcome?;
+    if summary.halved_steps > 0 {
+        eprintln!(
+            "note: {} of the run's steps were taken in halves after Newton failed on them \
+             (the implicit integrators' step halving, docs/math.md §5)",
+            summary.halved_steps
+        );
+    }
     write_run(staged.path(), &simulated)?;
     if summary.cancelled || ctx.cancel.load(Ordering::Relaxed) {
         let kept = staged.keep_interrupted().map_err(Error::Output)?;
