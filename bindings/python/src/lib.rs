@@ -397,6 +397,7 @@ fn run_dict<'py>(py: Python<'py>, run: &Simulated) -> PyResult<Bound<'py, PyDict
     out.set_item("dt", run.dt)?;
     out.set_item("t_end", run.t_end)?;
     out.set_item("stopped", traj.stopped.clone())?;
+    out.set_item("halved_steps", traj.halved_steps)?;
     out.set_item("warnings", run.warnings.clone())?;
     Ok(out)
 }

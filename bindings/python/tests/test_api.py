@@ -219,6 +219,8 @@ def test_simulate_options_and_errors():
     scene = ns.Scene.load(SHEET)
     run = ns.simulate(scene, integrator="newmark", dt=0.05, t_end=0.2)
     assert run["integrator"] == "newmark" and run["dt"] == 0.05
+    # A short, smooth run: no step was halved, none stopped the run.
+    assert run["halved_steps"] == 0 and run["stopped"] is None
     with pytest.raises(ns.InputError, match="unknown integrator"):
         ns.simulate(scene, integrator="leapfrog-ish")
     with pytest.raises(ns.InputError, match="model"):

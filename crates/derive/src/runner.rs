@@ -105,6 +105,9 @@ pub fn record(
             simulate(model, initial, opts, &mut observer).map_err(DeriveError::from)
         }
     };
+    if let Ok(summary) = &outcome {
+        traj.halved_steps = summary.halved_steps;
+    }
     (traj, outcome)
 }
 
@@ -119,10 +122,7 @@ pub fn record_noted(
     let (mut traj, outcome) = record(watched, initial, opts, Recording::default(), &mut |_, _| {});
     match outcome {
         Ok(summary) if summary.cancelled => Err(DeriveError::Cancelled),
-        Ok(summary) => {
-            traj.halved_steps = summary.halved_steps;
-            Ok(traj)
-        }
+        Ok(_) => Ok(traj),
         Err(e) if is_stop(&e) => {
             traj.stopped = Some(e.to_string());
             Ok(traj)

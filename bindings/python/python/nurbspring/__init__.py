@@ -249,6 +249,7 @@ def _run(raw: Dict[str, Any]) -> Dict[str, Any]:
         "dt": raw["dt"],
         "t_end": raw["t_end"],
         "stopped": raw["stopped"],
+        "halved_steps": raw["halved_steps"],
         "warnings": list(raw["warnings"]),
     }
 
@@ -347,7 +348,8 @@ def simulate(
     "external", "total"}: (T,) each [J] (elastic without the load; external: the load's
     potential; total: their sum), "integrator", "substeps" (steps per ``dt``: more than 1 when
     a scene's explicit integrator runs below its stability limit), "dt", "t_end", "stopped",
-    "warnings"}``; probe 0 is the point (node) at the centre of the parameter domain, then the
+    "halved_steps" (steps of an implicit integrator taken in halves after Newton failed on
+    them), "warnings"}``; probe 0 is the point (node) at the centre of the parameter domain, then the
     scene's probes.
     These are the samples of the CLI's trajectory.csv and energy.csv.
     """
