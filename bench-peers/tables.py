@@ -17,6 +17,7 @@ written as "not measured", never carried over from an earlier run.
     python3 bench-peers/tables.py RESULTS_DIR CRITERION_DIR [docs/benchmarks.md]
 """
 import json
+import math
 import os
 import re
 import statistics
@@ -188,6 +189,19 @@ class Run:
                 rows.append(f"| {label} | fails (see below) | — | < {goal:g} s | **missed** |")
                 continue
             add(label, fmt_time(t), None, f"< {goal:g} s", None if t is None else t < goal)
+        # Growth in control points between two nets: t ∝ N^p, N the control points.
+        for label, (small, n_small), (large, n_large) in (
+                ("time growth in control points, default derivation, 33² → 65² net",
+                 ("derive_default_33", 33 ** 2), ("derive_default_65", 65 ** 2)),
+                ("time growth in control points, paper derivation, 17² / 33² → 33² / 65² (12 candidates)",
+                 ("derive_paper_17_33_c12", 17 ** 2), ("derive_paper_33_65_c12", 33 ** 2))):
+            t1, t2 = self.binary(small), self.binary(large)
+            if t1 is None or t2 is None or self.binary_failed(small) or self.binary_failed(large):
+                rows.append(f"| {label} | not measured | — | near 1 | not measured |")
+                continue
+            p = math.log(t2 / t1) / math.log(n_large / n_small)
+            rows.append(f"| {label} | {fmt_time(t1)} → {fmt_time(t2)}: t ∝ N^{p:.2f} | — | exponent near 1 | "
+                        f"{'**met**' if p <= 1.2 else '**missed**'} |")
         fast = self.cmid("dnurbs_128x128_bicubic/assemble_scalar (S_M, S_K, N x N)")
         gen = self.cmid("dnurbs_128x128_bicubic/assemble_scalar, unequal weights (Gauss-point kernel, incl. pattern)")
         gismo = self.gismo_total()
