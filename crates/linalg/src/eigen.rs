@@ -1007,7 +1007,9 @@ mod tests {
     /// Random symmetric tridiagonals (unequal diagonals, so the shifts and the Gershgorin
     /// interval matter; some zero couplings, so the matrix splits): the QL iteration's
     /// eigenvalues and eigenvector rows and the bisection's k-th eigenvalue against faer's
-    /// dense decomposition of the same matrix, to the round-off of the spectrum's scale.
+    /// dense decomposition of the same matrix, to the round-off of the spectrum's scale
+    /// (measured 1.4e-15 of it on the eigenvalues and 3.3e-15 on the eigenvector rows, whose
+    /// eigenvalue gaps are at least 8.6e-4 of the scale; checked at 1e-14 and 1e-12).
     #[test]
     fn tridiagonal_ql_and_bisection_match_the_dense_decomposition() {
         let mut rng = SplitMix64(7);
@@ -1038,13 +1040,13 @@ mod tests {
             for k in 0..n {
                 let exact = dense.values[k];
                 assert!(
-                    (sorted[k] - exact).abs() < 1e-13 * scale,
+                    (sorted[k] - exact).abs() < 1e-14 * scale,
                     "n {n}, λ_{k}: QL {}, dense {exact}",
                     sorted[k]
                 );
                 let b = tridiagonal_eigenvalue(&d, &e, k);
                 assert!(
-                    (b - exact).abs() < 1e-13 * scale,
+                    (b - exact).abs() < 1e-14 * scale,
                     "n {n}, λ_{k}: bisection {b}, dense {exact}"
                 );
                 // Eigenvector rows, where the eigenvalue is simple (up to sign).
@@ -1056,7 +1058,7 @@ mod tests {
                     for (r, &row) in rows.iter().enumerate() {
                         let (ql, dn) = (z[r][order[k]].abs(), dense.vectors[(row, k)].abs());
                         assert!(
-                            (ql - dn).abs() < 1e-9,
+                            (ql - dn).abs() < 1e-12,
                             "n {n}, φ_{k}[{row}]: QL {ql}, dense {dn}"
                         );
                     }

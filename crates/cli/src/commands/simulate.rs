@@ -107,7 +107,7 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
     }
     // A failed run leaves the previous one in place (the staged folder is dropped).
     let summary = outcome?;
-    if summary.halved_steps > 0 {
+    if summary.halved_steps > 0 && ctx.verbose() {
         eprintln!(
             "note: {} of the run's steps were taken in halves after Newton failed on them \
              (the implicit integrators' step halving, docs/math.md §5)",

@@ -266,8 +266,14 @@ pub(crate) fn step_with_halving(
     model: &dyn DynamicModel,
     state: &mut State,
 ) -> Result<(), SimError> {
-    let failed = match scheme.substep(model, state, 0) {
-        Err(e @ SimError::NewtonFailed { .. }) => e,
+    let (step, time, iterations, residual) = match scheme.substep(model, state, 0) {
+        Err(SimError::NewtonFailed {
+            step,
+            time,
+            iterations,
+            residual,
+            ..
+        }) => (step, time, iterations, residual),
         other => return other,
     };
     let (saved, carried) = (state.clone(), scheme.carried().clone());
@@ -283,16 +289,6 @@ pub(crate) fn step_with_halving(
         Err(_) => {
             *state = saved;
             *scheme.carried() = carried;
-            let SimError::NewtonFailed {
-                step,
-                time,
-                iterations,
-                residual,
-                ..
-            } = failed
-            else {
-                unreachable!("matched above")
-            };
             Err(SimError::NewtonFailed {
                 step,
                 time,
