@@ -54,40 +54,37 @@ fn admissible(k: &KnotVector, fractions: &[f64]) -> Vec<f64> {
 }
 
 /// Same curve: points and first two derivatives at every sample parameter (ends and knots of
-/// both representations included).
-fn same_curve(a: &NurbsCurve, b: &NurbsCurve, what: &str) -> Result<(), TestCaseError> {
+/// both representations included), to `tol` of their natural scales: [`ROUNDOFF`] after knot
+/// insertion, [`ELEVATION`] after degree elevation, whose knot removals amplify rounding with
+/// the ratio of neighbouring spans (a degree 5 → 6 curve on spans of ratio 19 measured
+/// 1.06e-13 of its size at a point).
+fn same_curve(a: &NurbsCurve, b: &NurbsCurve, tol: f64, what: &str) -> Result<(), TestCaseError> {
     let size = max_abs(a.control_points());
     let len = min_span(a.basis().knots()).min(min_span(b.basis().knots()));
     let mut params = sample_params(a.basis().knots(), 33);
     params.extend(b.basis().knots().distinct());
     for u in params {
         let (da, db) = (a.derivatives(u, 2).unwrap(), b.derivatives(u, 2).unwrap());
-        check_scaled(
-            &db.point,
-            &da.point,
-            size,
-            ROUNDOFF,
-            &format!("{what}: c({u})"),
-        )?;
-        check_scaled(
-            &db.u,
-            &da.u,
-            size / len,
-            ROUNDOFF,
-            &format!("{what}: c'({u})"),
-        )?;
+        check_scaled(&db.point, &da.point, size, tol, &format!("{what}: c({u})"))?;
+        check_scaled(&db.u, &da.u, size / len, tol, &format!("{what}: c'({u})"))?;
         check_scaled(
             &db.uu,
             &da.uu,
             size / (len * len),
-            ROUNDOFF,
+            tol,
             &format!("{what}: c''({u})"),
         )?;
     }
     Ok(())
 }
 
-fn same_surface(a: &NurbsSurface, b: &NurbsSurface, what: &str) -> Result<(), TestCaseError> {
+/// [`same_curve`] for surfaces.
+fn same_surface(
+    a: &NurbsSurface,
+    b: &NurbsSurface,
+    tol: f64,
+    what: &str,
+) -> Result<(), TestCaseError> {
     let size = max_abs(a.control_points());
     let lu = min_span(a.basis_u().knots()).min(min_span(b.basis_u().knots()));
     let lv = min_span(a.basis_v().knots()).min(min_span(b.basis_v().knots()));
@@ -110,7 +107,7 @@ fn same_surface(a: &NurbsSurface, b: &NurbsSurface, what: &str) -> Result<(), Te
                     &db.get(slot),
                     &da.get(slot),
                     natural[slot.slot()],
-                    ROUNDOFF,
+                    tol,
                     &format!("{what}: {} at ({u}, {v})", slot.name()),
                 )?;
             }
@@ -151,7 +148,7 @@ fn check_matrix(
         check_close(
             &reproduced,
             &bo.all_values(u).unwrap(),
-            ROUNDOFF,
+            tol,
             &format!("N_old({u}) = Cᵀ N_new"),
         )?;
     }
@@ -173,7 +170,7 @@ proptest! {
         merged.sort_by(f64::total_cmp);
         prop_assert_eq!(fine.basis().knots().knots(), &merged[..]);
         check_matrix(k, fine.basis().knots(), &m, MATRIX_ENTRY)?;
-        same_curve(&c, &fine, "refined")?;
+        same_curve(&c, &fine, ROUNDOFF, "refined")?;
         let h = m.apply(&to_homogeneous(c.control_points(), c.weights()));
         check_close(&flat4(&h), &flat4(&to_homogeneous(fine.control_points(), fine.weights())), ROUNDOFF, "C P^w")?;
         // One knot at a time with A5.1, composed, gives the same matrix.
@@ -236,7 +233,7 @@ proptest! {
             prop_assert_eq!(*m1, m0 + t);
         }
         check_matrix(k, ku, &m, ELEVATION)?;
-        same_curve(&c, &up, "elevated")?;
+        same_curve(&c, &up, ELEVATION, "elevated")?;
         let (once, m1) = c.elevate_degree(1).unwrap();
         let (twice, m2) = once.elevate_degree(1).unwrap();
         let (direct, m12) = c.elevate_degree(2).unwrap();
@@ -260,17 +257,17 @@ proptest! {
         prop_assert_eq!(&c, &cu.kron(&cv));
         let h = c.apply(&to_homogeneous(s.control_points(), s.weights()));
         check_close(&flat4(&h), &flat4(&to_homogeneous(fine.control_points(), fine.weights())), ROUNDOFF, "C P^w")?;
-        same_surface(&s, &fine, "refined")?;
+        same_surface(&s, &fine, ROUNDOFF, "refined")?;
         let (uniform, cuni) = s.refine_uniform(1).unwrap();
         prop_assert_eq!(uniform.n_u(), s.n_u() + ku.nonempty_spans().len());
         prop_assert_eq!(uniform.n_v(), s.n_v() + kv.nonempty_spans().len());
         prop_assert_eq!(cuni.nrows, uniform.n_control_points());
-        same_surface(&s, &uniform, "uniformly refined")?;
+        same_surface(&s, &uniform, ROUNDOFF, "uniformly refined")?;
         let (up, e) = s.elevate_degree(tu, tv).unwrap();
         prop_assert_eq!(up.basis_u().degree(), ku.degree() + tu);
         prop_assert_eq!(up.basis_v().degree(), kv.degree() + tv);
         prop_assert_eq!(e.nrows, up.n_control_points());
-        same_surface(&s, &up, "elevated")?;
+        same_surface(&s, &up, ELEVATION, "elevated")?;
     }
 
     /// Refining twice equals refining once with the union (knots and composed matrices).
