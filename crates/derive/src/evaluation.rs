@@ -7,7 +7,7 @@ use nurbspring_geom::GeomError;
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::State;
 
-use crate::modal_solution::ModalBasis;
+use crate::modal_solution::{DENSE_MODES, ModalBasis};
 use crate::outcome::{FrequencyRow, MassReport, ProbeError, Validation};
 use crate::reference::{ReferenceKind, Watch, run_scalar, scalar_rows};
 use crate::scalar::{EnergyOrigin, ScalarSystem};
@@ -23,6 +23,9 @@ pub const WARN_RELATIVE_RMS: f64 = 0.10;
 pub const WARN_FREQUENCY: f64 = 0.01;
 /// A free mass off by more than this factor is a bad model.
 pub const WARN_MASS_FACTOR: f64 = 2.0;
+/// A truncated modal run whose left-out modes carry more than this share of the motion is
+/// reported.
+pub const WARN_TRUNCATION: f64 = 0.01;
 /// Distinct frequencies listed in the frequency table.
 pub const TABLE_MODES: usize = 8;
 
@@ -163,6 +166,8 @@ pub fn validation(
         msm_energy_drift: energy_drift(msm),
         msm_stopped: msm.stopped.clone(),
         msm_halved_steps: msm.halved_steps,
+        dnurbs_truncation: reference.truncation.clone(),
+        msm_truncation: msm.truncation.clone(),
         probes,
     }
 }
@@ -408,6 +413,29 @@ pub fn warnings(
             "under the second excitation the central node's relative RMS is {:.1}%",
             pct(second.relative_rms)
         ));
+    }
+    for (run, v) in [("validation", validation), ("second excitation", second)] {
+        for (model, t) in [
+            ("D-NURBS", &v.dnurbs_truncation),
+            ("MSM", &v.msm_truncation),
+        ] {
+            let Some(t) = t else { continue };
+            let share = match t.left_out {
+                Some(x) if x <= WARN_TRUNCATION => continue,
+                Some(x) => format!(
+                    "carry {:.1}% of its motion (above {:.0}%)",
+                    pct(x),
+                    pct(WARN_TRUNCATION)
+                ),
+                None => "carry an unknown share of its motion (it has rigid modes)".into(),
+            };
+            out.push(format!(
+                "the {run} followed the lowest {} of the {model}'s {} modes (a dense \
+                 eigenproblem above {DENSE_MODES} unknowns is not attempted); the modes left \
+                 out {share}, so its figures describe the low modes",
+                t.modes, t.unknowns
+            ));
+        }
     }
     if method == Method::Paper {
         for c in clamped {
@@ -790,8 +818,67 @@ mod tests {
             msm_energy_drift: None,
             msm_stopped: None,
             msm_halved_steps: 0,
+            dnurbs_truncation: None,
+            msm_truncation: None,
             probes: Vec::new(),
         }
+    }
+
+    /// A truncated modal run is reported when its left-out modes carry more than
+    /// [`WARN_TRUNCATION`] of the motion (1.5% does, 0.5% does not) or an unknown share, naming
+    /// the run, the model and the counts.
+    #[test]
+    fn a_truncated_run_is_reported_above_its_threshold() {
+        let rows: [crate::outcome::FrequencyRow; 0] = [];
+        let mass = MassReport {
+            free_msm: 1.0,
+            free_dnurbs: 1.0,
+            ..MassReport::default()
+        };
+        let truncated = |left_out| {
+            Some(crate::outcome::ModalTruncation {
+                modes: 200,
+                unknowns: 3721,
+                left_out,
+            })
+        };
+        let quiet = validation_with(0.0);
+        let with = |dnurbs, msm| Validation {
+            dnurbs_truncation: dnurbs,
+            msm_truncation: msm,
+            ..validation_with(0.0)
+        };
+        let w = warnings(
+            Method::Modal,
+            &with(
+                truncated(Some(0.005)),
+                truncated(Some(0.5 * WARN_TRUNCATION)),
+            ),
+            &quiet,
+            &rows,
+            &mass,
+            &[],
+        );
+        assert!(w.is_empty(), "{w:?}");
+        let w = warnings(
+            Method::Modal,
+            &quiet,
+            &with(truncated(Some(1.5 * WARN_TRUNCATION)), truncated(None)),
+            &rows,
+            &mass,
+            &[],
+        );
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(
+            w[0].starts_with(
+                "the second excitation followed the lowest 200 of the D-NURBS's 3721 modes"
+            ) && w[0].contains("carry 1.5% of its motion (above 1%)"),
+            "{w:?}"
+        );
+        assert!(
+            w[1].contains("of the MSM's 3721 modes") && w[1].contains("an unknown share"),
+            "{w:?}"
+        );
     }
 
     fn candidate(m: f64) -> crate::outcome::MassCandidate {

@@ -66,12 +66,12 @@ pub use modal::{
     MASS_FLOOR, MASS_REGULARIZATION, MODES, ModalFitReport, ModalSolution, SampledMode,
     lowest_frequency, modal_fit,
 };
-pub use modal_solution::ModalBasis;
+pub use modal_solution::{DENSE_MODES, ModalBasis, TRUNCATED_MODES};
 pub use omega::{NodeState, Omega};
 pub use outcome::{
     Derivation, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport,
-    NodeReduction, ParameterSet, ProbeError, ReductionReport, Spectrum, TrustRegionReport,
-    Validation,
+    ModalTruncation, NodeReduction, ParameterSet, ProbeError, ReductionReport, Spectrum,
+    TrustRegionReport, Validation,
 };
 pub use pipeline::{
     Judge, SelectedReading, derive_msm, evaluate, fit_step, mass_step, msm_spectrum, reference_run,

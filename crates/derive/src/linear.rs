@@ -443,6 +443,7 @@ pub fn derive_linear(
         run_scalar(&node.system, &node.basis, &watch, &judge.times, judge.dt)?;
     let run_name = |kind: crate::reference::ReferenceKind| match kind {
         crate::reference::ReferenceKind::Modal => "modal".to_string(),
+        crate::reference::ReferenceKind::TruncatedModal => "truncated-modal".to_string(),
         crate::reference::ReferenceKind::Newmark => "newmark".to_string(),
     };
     let validation_main = validation(
@@ -509,7 +510,7 @@ pub fn derive_linear(
         &node_masses,
         fixed,
     );
-    let omega_max = node.basis.omega.last().copied().unwrap_or(0.0);
+    let omega_max = node.basis.omega_max;
     let derived = ParameterSet {
         constants: lattice
             .as_ref()

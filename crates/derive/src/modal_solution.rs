@@ -1,19 +1,30 @@
-//! The exact solution of an undamped linear scalar system `M ü + K u = f` (constant `f`), by
-//! its modes (docs/math.md §8): the reference every linear model is judged against. Each of
-//! the three coordinates evolves by the same modes; only the points watched are evaluated.
+//! The solution of an undamped linear scalar system `M ü + K u = f` (constant `f`) by its modes
+//! (docs/math.md §8): the reference every linear model is judged against. Each of the three
+//! coordinates evolves by the same modes; only the points watched are evaluated. Up to
+//! [`DENSE_MODES`] unknowns every mode is computed (dense) and the solution is exact; above, the
+//! lowest [`TRUNCATED_MODES`] (sparse shift-invert Lanczos) with the static correction of the
+//! modes left out, and the share of the motion they carry is estimated
+//! ([`ModalBasis::left_out`]).
 
-use nurbspring_linalg::{DenseMatrix, SparseMatrix, generalized_symmetric_eigen};
+use nurbspring_linalg::{
+    DenseMatrix, SparseMatrix, SpdSolver, generalized_eigen_sparse_lowest,
+    generalized_symmetric_eigen, largest_generalized_eigenvalue,
+};
 
 use crate::DeriveError;
-use crate::scalar::{EnergyOrigin, dot};
+use crate::scalar::{EnergyOrigin, apply3, dot};
 
-/// Largest system solved by dense modes.
-pub const MAX_MODAL: usize = 4000;
+/// Largest system whose modes are all computed (dense generalized eigenproblem, `O(n³)`).
+pub const DENSE_MODES: usize = 2000;
+
+/// Modes kept for a larger system.
+pub const TRUNCATED_MODES: usize = 200;
 
 /// Relative size below which an eigenvalue counts as a rigid (zero-frequency) mode.
 const RIGID: f64 = 1e-12;
 
-/// The modes of `K φ = ω² M φ`, M-orthonormal, ascending.
+/// Lowest modes of `K φ = ω² M φ`, M-orthonormal, ascending: all of them, or the lowest
+/// [`TRUNCATED_MODES`] of a large system.
 #[derive(Clone, Debug)]
 pub struct ModalBasis {
     /// Angular frequencies (0 for rigid modes).
@@ -22,25 +33,69 @@ pub struct ModalBasis {
     pub lambda: Vec<f64>,
     /// Mode shapes, one column per mode.
     pub vectors: DenseMatrix,
+    /// The highest angular frequency of the system (the last of `omega` when every mode is
+    /// kept; by Lanczos otherwise).
+    pub omega_max: f64,
     /// The mass matrix (for projections).
     mass: SparseMatrix,
+    /// The stiffness matrix (for the static correction and the share left out).
+    stiffness: SparseMatrix,
+}
+
+/// The static displacement of the modes left out, its energy terms: `c = (I − ΦΦᵀM) K⁻¹ f`
+/// per coordinate.
+struct StaticCorrection {
+    c: Vec<[f64; 3]>,
 }
 
 impl ModalBasis {
-    /// Every mode of `(K, M)` (dense; at most [`MAX_MODAL`] unknowns).
+    /// The modes of `(K, M)`: every mode up to [`DENSE_MODES`] unknowns, the lowest
+    /// [`TRUNCATED_MODES`] above.
     pub fn new(k: &SparseMatrix, m: &SparseMatrix) -> Result<Self, DeriveError> {
-        let n = k.nrows();
-        if n > MAX_MODAL {
-            return Err(DeriveError::InvalidOption {
-                name: "modal solution size",
-                value: n.to_string(),
-                reason: format!("more than {MAX_MODAL} unknowns for dense modes"),
-            });
+        if k.nrows() <= DENSE_MODES {
+            Self::all(k, m)
+        } else {
+            Self::lowest(k, m, TRUNCATED_MODES)
         }
+    }
+
+    /// Every mode of `(K, M)` (dense: `O(n³)` time, `O(n²)` memory).
+    pub fn all(k: &SparseMatrix, m: &SparseMatrix) -> Result<Self, DeriveError> {
         let eig = generalized_symmetric_eigen(&k.to_dense(), &m.to_dense())?;
         let scale = eig.values.iter().fold(0.0_f64, |a, &l| a.max(l.abs()));
-        let lambda: Vec<f64> = eig
-            .values
+        Ok(Self::from_pairs(eig.values, eig.vectors, scale, k, m))
+    }
+
+    /// The lowest `count` modes of `(K, M)` by shift-invert Lanczos (every mode, dense, when
+    /// `count` reaches the size). The shift lies just below zero so that rigid modes are found.
+    pub fn lowest(k: &SparseMatrix, m: &SparseMatrix, count: usize) -> Result<Self, DeriveError> {
+        if count >= k.nrows() {
+            return Self::all(k, m);
+        }
+        let (tk, tm) = (
+            k.diagonal().iter().sum::<f64>(),
+            m.diagonal().iter().sum::<f64>(),
+        );
+        let shift = if tk > 0.0 && tm > 0.0 {
+            -1e-6 * tk / tm
+        } else {
+            -1.0
+        };
+        let top = largest_generalized_eigenvalue(k, m, 1e-10)?;
+        let eig = generalized_eigen_sparse_lowest(k, m, count, shift)?;
+        let mut basis = Self::from_pairs(eig.values, eig.vectors, top.abs(), k, m);
+        basis.omega_max = top.max(0.0).sqrt();
+        Ok(basis)
+    }
+
+    fn from_pairs(
+        values: Vec<f64>,
+        vectors: DenseMatrix,
+        scale: f64,
+        k: &SparseMatrix,
+        m: &SparseMatrix,
+    ) -> Self {
+        let lambda: Vec<f64> = values
             .iter()
             .map(|&l| {
                 if l.abs() <= RIGID * scale {
@@ -50,15 +105,18 @@ impl ModalBasis {
                 }
             })
             .collect();
-        Ok(Self {
-            omega: lambda.iter().map(|l| l.sqrt()).collect(),
+        let omega: Vec<f64> = lambda.iter().map(|l| l.sqrt()).collect();
+        Self {
+            omega_max: omega.last().copied().unwrap_or(0.0),
+            omega,
             lambda,
-            vectors: eig.vectors,
+            vectors,
             mass: m.clone(),
-        })
+            stiffness: k.clone(),
+        }
     }
 
-    /// Number of modes.
+    /// Number of modes kept.
     pub fn len(&self) -> usize {
         self.omega.len()
     }
@@ -68,6 +126,16 @@ impl ModalBasis {
         self.omega.is_empty()
     }
 
+    /// Unknowns of the system (the number of its modes).
+    pub fn unknowns(&self) -> usize {
+        self.mass.nrows()
+    }
+
+    /// True when every mode is kept (the modal solution is exact).
+    pub fn is_complete(&self) -> bool {
+        self.len() == self.unknowns()
+    }
+
     /// Mode `i` as a vector.
     pub fn mode(&self, i: usize) -> Vec<f64> {
         self.vectors.column(i)
@@ -75,7 +143,7 @@ impl ModalBasis {
 
     /// `Φᵀ M x` per coordinate (modal coordinates of a displacement or velocity field).
     fn project_mass(&self, x: &[[f64; 3]]) -> Vec<[f64; 3]> {
-        let mx = crate::scalar::apply3(&self.mass, x);
+        let mx = apply3(&self.mass, x);
         self.project(&mx)
     }
 
@@ -94,13 +162,95 @@ impl ModalBasis {
         out
     }
 
+    /// `Φ η` per coordinate.
+    fn expand(&self, eta: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        (0..self.vectors.nrows())
+            .map(|a| {
+                let row = self.vectors.row(a);
+                let mut x = [0.0; 3];
+                for (phi, e) in row.iter().zip(eta) {
+                    for c in 0..3 {
+                        x[c] += phi * e[c];
+                    }
+                }
+                x
+            })
+            .collect()
+    }
+
+    /// `K⁻¹ x` per coordinate, or `None` when K is singular (rigid modes).
+    fn static_solve(&self, x: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
+        let solver = SpdSolver::new(&self.stiffness).ok()?;
+        let mut out = vec![[0.0; 3]; x.len()];
+        for c in 0..3 {
+            let mut col: Vec<f64> = x.iter().map(|p| p[c]).collect();
+            solver.solve_in_place(&mut col);
+            for (o, v) in out.iter_mut().zip(col) {
+                o[c] = v;
+            }
+        }
+        Some(out)
+    }
+
+    /// `x − Φ Φᵀ M x`: the part of `x` in the modes left out.
+    fn left_out_part(&self, x: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let kept = self.expand(&self.project_mass(x));
+        x.iter()
+            .zip(kept)
+            .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+            .collect()
+    }
+
+    /// The static correction of a truncated basis under the load `f` (none when every mode is
+    /// kept, the load is zero or K is singular).
+    fn static_correction(&self, f: &[[f64; 3]]) -> Option<StaticCorrection> {
+        if self.is_complete() || f.iter().all(|p| p.iter().all(|&x| x == 0.0)) {
+            return None;
+        }
+        let us = self.static_solve(f)?;
+        Some(StaticCorrection {
+            c: self.left_out_part(&us),
+        })
+    }
+
+    /// The share of the motion from displacement `u0`, velocity `v0` and constant load `f`
+    /// carried by the modes left out: `√(Σ_{i>r} a_i² / Σ_i a_i²)` with `a_i² = Σ_x
+    /// (φ_iᵀM(u₀ − K⁻¹f))² + (φ_iᵀMv₀/ω_i)²` the squared amplitude of mode `i` (so the ratio is
+    /// that of the time-RMS M-norms of the oscillation about the static state, the sums over
+    /// every mode in closed form: `Σ_i a_i² = ‖u₀ − K⁻¹f‖²_M + v₀ᵀMK⁻¹Mv₀`). `Some(0)` when
+    /// every mode is kept, `None` when K is singular (rigid modes) or nothing moves.
+    pub fn left_out(&self, u0: &[[f64; 3]], v0: &[[f64; 3]], f: &[[f64; 3]]) -> Option<f64> {
+        if self.is_complete() {
+            return Some(0.0);
+        }
+        let us = self.static_solve(f)?;
+        let w: Vec<[f64; 3]> = u0
+            .iter()
+            .zip(&us)
+            .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+            .collect();
+        let mv = apply3(&self.mass, v0);
+        let z = self.static_solve(&mv)?;
+        let total = dot(&w, &apply3(&self.mass, &w)) + dot(&mv, &z);
+        let (ew, ev) = (self.project_mass(&w), self.project(&mv));
+        let kept: f64 = (0..self.len())
+            .filter(|&i| self.lambda[i] > 0.0)
+            .map(|i| dot(&ew[i..=i], &ew[i..=i]) + dot(&ev[i..=i], &ev[i..=i]) / self.lambda[i])
+            .sum();
+        (total > 0.0).then(|| ((total - kept).max(0.0) / total).sqrt())
+    }
+
     /// The displacement at the points `watch` (rows: weights of the unknowns, so a point is
     /// `Σ_a watch[p][a] u_a`) at each time of `times`, from displacement `u0`, velocity `v0`
     /// and constant load `f` (each one `[x, y, z]` per unknown); with `energy`, also the
     /// `[kinetic, elastic, external]` energies at each time, in closed form from the modal
     /// coordinates (M-orthonormal modes, `u = Φ η`): kinetic `½ Σ η̇²`, elastic
     /// `E₀ + hᵀ η + ½ Σ ω² η²` and load potential `V₀ − gᵀ η`, with `h = Φᵀ internal` and
-    /// `g = Φᵀ force` of the [`EnergyOrigin`] (the static load offset is part of `η`).
+    /// `g = Φᵀ force` of the [`EnergyOrigin`] (the static load offset is part of `η`). A
+    /// truncated basis adds the static displacement of the modes left out,
+    /// `c = (I − ΦΦᵀM) K⁻¹ f`, constant in time (M-orthogonal to the modes kept, so it adds
+    /// only constants to the energies): the motion of the modes left out is dropped, their
+    /// static response kept.
     pub fn response(
         &self,
         watch: &[Vec<(usize, f64)>],
@@ -117,6 +267,29 @@ impl ModalBasis {
             self.project(f),
         );
         let origin = energy.map(|e| (e, self.project(&e.internal), self.project(&e.force)));
+        let correction = self.static_correction(f);
+        // The correction at the watched points and its energy constants.
+        let offsets: Vec<[f64; 3]> = watch
+            .iter()
+            .map(|w| {
+                let mut d = [0.0; 3];
+                if let Some(s) = &correction {
+                    for &(a, c) in w {
+                        for x in 0..3 {
+                            d[x] += c * s.c[a][x];
+                        }
+                    }
+                }
+                d
+            })
+            .collect();
+        let (elastic_offset, external_offset) = match (&correction, energy) {
+            (Some(s), Some(e)) => (
+                dot(&e.internal, &s.c) + 0.5 * dot(&s.c, &apply3(&self.stiffness, &s.c)),
+                -dot(&e.force, &s.c),
+            ),
+            _ => (0.0, 0.0),
+        };
         // The watched combinations of each mode.
         let shapes: Vec<Vec<f64>> = watch
             .iter()
@@ -146,7 +319,7 @@ impl ModalBasis {
                 }
             }
             for (p, shape) in shapes.iter().enumerate() {
-                let mut d = [0.0; 3];
+                let mut d = offsets[p];
                 for i in 0..r {
                     for x in 0..3 {
                         d[x] += shape[i] * eta[i][x];
@@ -161,8 +334,8 @@ impl ModalBasis {
                     .sum();
                 energies.push([
                     kinetic,
-                    e.elastic + dot(h, &eta) + strain,
-                    e.external - dot(fe, &eta),
+                    e.elastic + elastic_offset + dot(h, &eta) + strain,
+                    e.external + external_offset - dot(fe, &eta),
                 ]);
             }
         }

@@ -118,8 +118,29 @@ pub struct Validation {
     /// (absent when none was).
     #[serde(skip_serializing_if = "is_zero")]
     pub msm_halved_steps: usize,
+    /// The D-NURBS reference's truncation, when it followed its lowest modes only (a system
+    /// above `DENSE_MODES` unknowns).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dnurbs_truncation: Option<ModalTruncation>,
+    /// The same for the MSM's modal run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub msm_truncation: Option<ModalTruncation>,
     /// Every probe.
     pub probes: Vec<ProbeError>,
+}
+
+/// A modal run on the lowest modes of a large system (docs/math.md §8.6).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ModalTruncation {
+    /// Modes followed.
+    pub modes: usize,
+    /// Modes of the system (its unknowns).
+    pub unknowns: usize,
+    /// The share of the motion in the modes left out: the time-RMS M-norm of their
+    /// oscillation over that of every mode's ([`crate::ModalBasis::left_out`]); absent when
+    /// it cannot be computed (rigid modes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub left_out: Option<f64>,
 }
 
 /// Stability, residuals and validation of a derived (or given) parameter set.
@@ -151,7 +172,8 @@ pub struct ParameterSet {
 
 /// Angular frequencies (rad/s) of both models linearized at rest, ascending, each with its
 /// multiplicity (constant-weight models give triplets; the MSM's zeros are its directions
-/// without linear stiffness).
+/// without linear stiffness). A model above `DENSE_MODES` unknowns lists its lowest
+/// `TRUNCATED_MODES` (docs/math.md §8.6).
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Spectrum {
     /// D-NURBS: `K φ = ω² M φ` on the free dofs.

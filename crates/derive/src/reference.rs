@@ -9,6 +9,7 @@ use nurbspring_sim::{
 use serde::Serialize;
 
 use crate::modal_solution::ModalBasis;
+use crate::outcome::ModalTruncation;
 use crate::scalar::ScalarSystem;
 use crate::{DeriveError, Trajectory};
 
@@ -21,6 +22,9 @@ pub const MAX_SAMPLES: usize = 20_000;
 pub enum ReferenceKind {
     /// The exact modal solution (undamped linear model, constant loads).
     Modal,
+    /// The modal solution on the lowest modes of a large system, with the static correction
+    /// of the rest (`validation.dnurbs_truncation` says how much motion they carry).
+    TruncatedModal,
     /// Newmark average acceleration at the sampling step.
     Newmark,
 }
@@ -70,13 +74,23 @@ pub fn run_scalar(
             Some(&sys.energy),
         );
         traj.energy = energy;
+        let kind = if basis.is_complete() {
+            ReferenceKind::Modal
+        } else {
+            traj.truncation = Some(ModalTruncation {
+                modes: basis.len(),
+                unknowns: basis.unknowns(),
+                left_out: basis.left_out(&sys.displacement, &sys.velocity, &sys.load),
+            });
+            ReferenceKind::TruncatedModal
+        };
         for (p, (w, r)) in watch.iter().zip(response).enumerate() {
             traj.probes[p] = r
                 .iter()
                 .map(|d| [w.base[0] + d[0], w.base[1] + d[1], w.base[2] + d[2]])
                 .collect();
         }
-        return Ok((traj, ReferenceKind::Modal));
+        return Ok((traj, kind));
     }
     // Damped: Newmark on the 3-D system M ü + c M u̇ + K u = f.
     let m3 = sys.mass.kron_identity(3);

@@ -3,6 +3,8 @@
 
 use serde::Serialize;
 
+use crate::outcome::ModalTruncation;
+
 /// Sampled positions of the probe points over time.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Trajectory {
@@ -17,6 +19,10 @@ pub struct Trajectory {
     pub stopped: Option<String>,
     /// Steps of an implicit integrator taken in halves after Newton failed on them.
     pub halved_steps: usize,
+    /// Set when the run followed a truncated modal basis: how many modes, and the share of
+    /// the motion left out.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truncation: Option<ModalTruncation>,
 }
 
 impl Trajectory {
@@ -28,6 +34,7 @@ impl Trajectory {
             energy: Vec::new(),
             stopped: None,
             halved_steps: 0,
+            truncation: None,
         }
     }
 

@@ -186,6 +186,24 @@ fn validation_table(s: &mut String, rows: &[(&str, &Validation)]) {
             drift(v.msm_energy_drift)
         );
     }
+    for (name, v) in rows {
+        for (model, t) in [
+            ("D-NURBS", &v.dnurbs_truncation),
+            ("MSM", &v.msm_truncation),
+        ] {
+            if let Some(t) = t {
+                let share = t.left_out.map_or_else(
+                    || "an unknown share".to_string(),
+                    |x| format!("{:.2}%", 100.0 * x),
+                );
+                let _ = writeln!(
+                    s,
+                    "\n{name}: the {model} followed its lowest {} of {} modes, with the static correction of the rest; the modes left out carry {share} of its motion (docs/math.md §8.6).",
+                    t.modes, t.unknowns
+                );
+            }
+        }
+    }
     let _ = writeln!(
         s,
         "\nEnergy drift: the largest change of each model's total energy (kinetic + elastic + load) over the run, relative to its largest kinetic + elastic energy (zero without damping up to the integrator's error; the dissipated share with damping; `energy.png` plots both)."

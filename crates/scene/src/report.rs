@@ -528,8 +528,7 @@ mod tests {
             t: vec![0.0, 1.0, 2.0],
             probes: vec![],
             energy: vec![[4.0, 0.0, 0.0], [1.0, 2.0, -1.0], [0.0, 5.0, -2.0]],
-            stopped: None,
-            halved_steps: 0,
+            ..Trajectory::default()
         };
         let s = energy_series("MSM", &traj);
         assert_eq!(s[0].name, "MSM total (kinetic + elastic + load)");

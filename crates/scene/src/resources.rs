@@ -340,13 +340,27 @@ impl Scene {
                 parts.push(("sparse factor of K", factor, geometry_key));
                 let nodes = lattice(method, &mut parts);
                 // Dense eigenproblems of the free scalar system (the exact modal validation
-                // of both models; the reduction's dense K_T and M_T; the mass candidates).
+                // of both models; the reduction's dense K_T and M_T; the mass candidates);
+                // above DENSE_MODES unknowns the modal and excitation derivations keep the
+                // lowest TRUNCATED_MODES of each model instead (shift-invert Lanczos: its
+                // basis of 3r + 60 vectors, the modes, the factor of K − σM).
                 let scalar = n.max(nodes);
-                parts.push((
-                    "dense eigenproblems",
-                    2.0 * 4.0 * 8.0 * scalar * scalar,
-                    geometry_key,
-                ));
+                let truncated = matches!(method, Method::Modal | Method::Excitation)
+                    && scalar > nurbspring_derive::DENSE_MODES as f64;
+                if truncated {
+                    let r = nurbspring_derive::TRUNCATED_MODES as f64;
+                    parts.push((
+                        "Lanczos bases of the lowest modes",
+                        2.0 * 8.0 * scalar * (4.0 * r + 60.0),
+                        geometry_key,
+                    ));
+                } else {
+                    parts.push((
+                        "dense eigenproblems",
+                        2.0 * 4.0 * 8.0 * scalar * scalar,
+                        geometry_key,
+                    ));
+                }
                 output = 64.0 * 1024.0 * 1024.0 + 400.0 * nodes;
             }
         }

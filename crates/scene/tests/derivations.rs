@@ -252,3 +252,116 @@ fn linear_constraints_fall_back_to_the_paper() {
     assert!(e.to_string().contains("constraints.linear"), "{e}");
     assert_eq!(scene("paper").derivation(), (Method::Modal, None));
 }
+
+/// A flat 1 × 1 bicubic sheet with `n × n` control points at the Greville abscissae of uniform
+/// clamped knots, clamped by two rings, struck by a uniform initial velocity (the `derive`
+/// benchmark's sheet).
+fn sheet(n: usize) -> Scene {
+    let p = 3;
+    let inner = n - p - 1;
+    let mut knots = vec![0.0; p + 1];
+    knots.extend((1..=inner).map(|i| i as f64 / (inner + 1) as f64));
+    knots.extend(vec![1.0; p + 1]);
+    let greville: Vec<f64> = (0..n)
+        .map(|i| knots[i + 1..i + p + 1].iter().sum::<f64>() / p as f64)
+        .collect();
+    let rows: Vec<String> = greville
+        .iter()
+        .map(|x| {
+            let row: Vec<String> = greville
+                .iter()
+                .map(|y| format!("[{x:?}, {y:?}, 0.0]"))
+                .collect();
+            format!("  [{}],", row.join(", "))
+        })
+        .collect();
+    let text = format!(
+        "[surface]\ndegree_u = 3\ndegree_v = 3\nknots_u = {knots:?}\nknots_v = {knots:?}\n\
+         control_points = [\n{}\n]\n[material]\nmu = 1.0\nalpha11 = 1.0\nalpha22 = 1.0\n\
+         beta11 = 0.01\nbeta22 = 0.01\n[constraints]\nfixed_rings = 2\n[initial]\n\
+         velocity = [0.0, 0.0, -0.1]\n[simulation]\ndt = 0.05\nt_end = 20.0\n",
+        rows.join("\n")
+    );
+    Scene::from_str(&text, "sheet.toml").unwrap()
+}
+
+/// Above `DENSE_MODES` unknowns both models are followed through their lowest
+/// `TRUNCATED_MODES` modes, and say so; the truncated D-NURBS reference against the exact one
+/// (every mode, dense, computed here) at the central node: the difference is below the share
+/// of the motion left out.
+#[test]
+fn a_large_net_is_validated_on_its_lowest_modes() {
+    use nurbspring_derive::{DENSE_MODES, DnurbsModes, Judge, ModalBasis, Setup, TRUNCATED_MODES};
+    let s = sheet(49);
+    let d = derive(&s, Method::Modal);
+    let v = &d.derived.validation;
+    assert_eq!(v.reference, ReferenceKind::TruncatedModal);
+    assert_eq!(v.integrator, "truncated-modal");
+    let (dn, msm) = (
+        v.dnurbs_truncation.clone().unwrap(),
+        v.msm_truncation.clone().unwrap(),
+    );
+    assert_eq!((dn.modes, dn.unknowns), (TRUNCATED_MODES, 45 * 45));
+    assert!(dn.unknowns > DENSE_MODES && msm.unknowns > DENSE_MODES);
+    let left_out = dn.left_out.unwrap();
+    assert!(left_out > 0.0 && left_out < 0.005, "{left_out}");
+    assert!(d.second_excitation.dnurbs_truncation.is_some());
+    // The exact reference, every mode.
+    let config = s.derivation_config(Some(Method::Modal)).unwrap();
+    let setup = Setup::new(&config).unwrap();
+    let truncated = DnurbsModes::new(&setup, "test").unwrap();
+    let exact = DnurbsModes {
+        basis: ModalBasis::all(&truncated.system.stiffness, &truncated.system.mass).unwrap(),
+        system: truncated.system.clone(),
+    };
+    let (a, kind_a) = Judge::new(&setup, &config, Some(truncated))
+        .unwrap()
+        .reference()
+        .unwrap();
+    let (b, kind_b) = Judge::new(&setup, &config, Some(exact))
+        .unwrap()
+        .reference()
+        .unwrap();
+    assert_eq!(
+        (kind_a, kind_b),
+        (ReferenceKind::TruncatedModal, ReferenceKind::Modal)
+    );
+    let c = nurbspring_derive::compare_points(&b.t, &b.probes[0], &a.probes[0]);
+    println!(
+        "left out {left_out:.3e}, central node {:.3e}",
+        c.relative_rms
+    );
+    assert!(c.relative_rms < 0.01, "{}", c.relative_rms);
+}
+
+/// The memory estimate of `derive` on a large net counts the Lanczos bases of the truncated
+/// modal runs, not dense eigenproblems, for the modal derivation (129 × 129 net: measured peak
+/// 0.51 GB); the reduction keeps its dense matrices.
+#[test]
+fn the_memory_estimate_of_a_large_net_counts_lanczos_bases() {
+    use nurbspring_scene::resources::Job;
+    let s = sheet(129);
+    let parts = |method| -> Vec<&'static str> {
+        s.estimate(Job::Derive(method))
+            .memory_parts
+            .iter()
+            .map(|p| p.what)
+            .collect()
+    };
+    let modal = parts(Method::Modal);
+    assert!(
+        modal.contains(&"Lanczos bases of the lowest modes"),
+        "{modal:?}"
+    );
+    assert!(!modal.contains(&"dense eigenproblems"), "{modal:?}");
+    let memory = s.estimate(Job::Derive(Method::Modal)).memory;
+    assert!((510 << 20..4 << 30).contains(&memory), "{memory}");
+    assert!(parts(Method::Reduction).contains(&"dense eigenproblems"));
+    assert!(
+        sheet(33)
+            .estimate(Job::Derive(Method::Modal))
+            .memory_parts
+            .iter()
+            .any(|p| p.what == "dense eigenproblems")
+    );
+}
