@@ -191,7 +191,9 @@ class Run:
             add(label, fmt_time(t), None, f"< {goal:g} s", None if t is None else t < goal)
         # Growth in control points between two nets: t ∝ N^p, N the control points.
         for label, (small, n_small), (large, n_large) in (
-                ("time growth in control points, default derivation, 33² → 65² net",
+                ("time growth in control points, default derivation, 65² → 129² net (lowest 200 modes)",
+                 ("derive_default_65", 65 ** 2), ("derive_default_129", 129 ** 2)),
+                ("time growth in control points, default derivation, 33² → 65² net (every mode → lowest 200)",
                  ("derive_default_33", 33 ** 2), ("derive_default_65", 65 ** 2)),
                 ("time growth in control points, paper derivation, 17² / 33² → 33² / 65² (12 candidates)",
                  ("derive_paper_17_33_c12", 17 ** 2), ("derive_paper_33_65_c12", 33 ** 2))):
@@ -344,7 +346,9 @@ class Run:
                              ("default derivation, 9² cps / 9² lattice", "derive_default_9"),
                              ("same, 17² / 17²", "derive_default_17"),
                              ("same, 33² / 33²", "derive_default_33"),
-                             ("same, 65² / 65²", "derive_default_65")):
+                             ("same, 65² / 65² (lowest 200 modes)", "derive_default_65"),
+                             ("same, 97² / 97² (lowest 200 modes)", "derive_default_97"),
+                             ("same, 129² / 129² (lowest 200 modes)", "derive_default_129")):
             bins = [k for k in self.res if k[1] == bench]
             if not bins:
                 rows.append(f"| {label} | not measured | | | |")
