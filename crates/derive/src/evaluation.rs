@@ -328,14 +328,17 @@ pub fn with_totals(
 ) -> MassReport {
     let m = &model.matrices().mass;
     let dpp = model.matrices().dofs_per_point;
-    let fixed_cp = model.fixed_points();
+    let mut fixed_cp = vec![false; model.geometry().n_control_points()];
+    for &k in model.fixed_points() {
+        fixed_cp[k] = true;
+    }
     let (mut total, mut free) = (0.0, 0.0);
     for (i, j, v) in m.triplets() {
         if dpp == 4 && (i % 4 == 3 || j % 4 == 3) {
             continue;
         }
         total += v;
-        if !fixed_cp.contains(&(i / dpp)) {
+        if !fixed_cp[i / dpp] {
             free += v;
         }
     }

@@ -510,7 +510,7 @@ pub fn derive_linear(
         &node_masses,
         fixed,
     );
-    let omega_max = node.basis.omega_max;
+    let omega_max = node.basis.omega_max()?;
     let derived = ParameterSet {
         constants: lattice
             .as_ref()

@@ -6,6 +6,8 @@
 //! modes left out, and the share of the motion they carry is estimated
 //! ([`ModalBasis::left_out`]).
 
+use std::sync::OnceLock;
+
 use nurbspring_linalg::{
     DenseMatrix, SparseMatrix, SpdSolver, generalized_eigen_sparse_lowest,
     generalized_symmetric_eigen, largest_generalized_eigenvalue,
@@ -33,9 +35,8 @@ pub struct ModalBasis {
     pub lambda: Vec<f64>,
     /// Mode shapes, one column per mode.
     pub vectors: DenseMatrix,
-    /// The highest angular frequency of the system (the last of `omega` when every mode is
-    /// kept; by Lanczos otherwise).
-    pub omega_max: f64,
+    /// The highest angular frequency, once asked for ([`ModalBasis::omega_max`]).
+    omega_max: OnceLock<f64>,
     /// The mass matrix (for projections).
     mass: SparseMatrix,
     /// The stiffness matrix (for the static correction and the share left out).
@@ -81,11 +82,18 @@ impl ModalBasis {
         } else {
             -1.0
         };
-        let top = largest_generalized_eigenvalue(k, m, 1e-10)?;
         let eig = generalized_eigen_sparse_lowest(k, m, count, shift)?;
-        let mut basis = Self::from_pairs(eig.values, eig.vectors, top.abs(), k, m);
-        basis.omega_max = top.max(0.0).sqrt();
-        Ok(basis)
+        // The scale of the rigid-mode test: the largest of the diagonal Rayleigh quotients
+        // `K_ii / M_ii` and the modes found, within a small factor of λ_max (which would cost a
+        // Lanczos run of its own; `omega_max` computes it when asked).
+        let diagonal = k
+            .diagonal()
+            .iter()
+            .zip(m.diagonal())
+            .filter(|&(_, mi)| mi > 0.0)
+            .fold(0.0_f64, |a, (ki, mi)| a.max(ki.abs() / mi));
+        let scale = eig.values.iter().fold(diagonal, |a, &l| a.max(l.abs()));
+        Ok(Self::from_pairs(eig.values, eig.vectors, scale, k, m))
     }
 
     fn from_pairs(
@@ -106,8 +114,12 @@ impl ModalBasis {
             })
             .collect();
         let omega: Vec<f64> = lambda.iter().map(|l| l.sqrt()).collect();
+        let omega_max = OnceLock::new();
+        if omega.len() == k.nrows() {
+            let _ = omega_max.set(omega.last().copied().unwrap_or(0.0));
+        }
         Self {
-            omega_max: omega.last().copied().unwrap_or(0.0),
+            omega_max,
             omega,
             lambda,
             vectors,
@@ -134,6 +146,16 @@ impl ModalBasis {
     /// True when every mode is kept (the modal solution is exact).
     pub fn is_complete(&self) -> bool {
         self.len() == self.unknowns()
+    }
+
+    /// The highest angular frequency of the system: the last of `omega` when every mode is
+    /// kept, else by Lanczos on `M⁻¹K` (computed once, on the first call).
+    pub fn omega_max(&self) -> Result<f64, DeriveError> {
+        if let Some(&w) = self.omega_max.get() {
+            return Ok(w);
+        }
+        let top = largest_generalized_eigenvalue(&self.stiffness, &self.mass, 1e-10)?;
+        Ok(*self.omega_max.get_or_init(|| top.max(0.0).sqrt()))
     }
 
     /// Mode `i` as a vector.
