@@ -200,8 +200,12 @@ impl ModalBasis {
             .collect()
     }
 
-    /// `K⁻¹ x` per coordinate, or `None` when K is singular (rigid modes).
+    /// `K⁻¹ x` per coordinate, or `None` when K is singular (a rigid mode among those found;
+    /// they are the lowest, so a truncated basis has them all).
     fn static_solve(&self, x: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
+        if self.lambda.first() == Some(&0.0) {
+            return None;
+        }
         let solver = SpdSolver::new(&self.stiffness).ok()?;
         let mut out = vec![[0.0; 3]; x.len()];
         for c in 0..3 {

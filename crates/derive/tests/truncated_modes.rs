@@ -11,6 +11,33 @@ use nurbspring_linalg::{SparseMatrix, SpdSolver};
 /// eigenvalues to 7e-14 relative, the responses to 3e-13.
 const LANCZOS: f64 = 1e-12;
 
+/// The membrane of [`membrane`] with its border free (natural boundary): K singular, one
+/// rigid mode (the translation).
+fn free_membrane(nx: usize, ny: usize) -> (SparseMatrix, SparseMatrix) {
+    let (k, m) = membrane(nx, ny);
+    // Each diagonal entry becomes the sum of its row's couplings.
+    let mut row_sum = vec![0.0; k.nrows()];
+    for (i, j, v) in k.triplets() {
+        if i != j {
+            row_sum[i] -= v;
+        }
+    }
+    let t: Vec<(usize, usize, f64)> = k
+        .triplets()
+        .map(|(i, j, v)| {
+            if i == j {
+                (i, j, row_sum[i])
+            } else {
+                (i, j, v)
+            }
+        })
+        .collect();
+    (
+        SparseMatrix::from_triplets(k.nrows(), k.ncols(), &t).unwrap(),
+        m,
+    )
+}
+
 /// A membrane on an `nx × ny` grid fixed at its border: the 5-point Laplacian (unequal
 /// spacings) as K, and a consistent-like mass with unequal diagonal and neighbour couplings
 /// (diagonally dominant, so SPD) as M: simple eigenvalues, a non-diagonal M-inner product.
@@ -48,7 +75,7 @@ fn excitation(n: usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>) {
     (
         (0..n).map(|a| [f(a, 0.1), 0.0, -f(a, 0.05)]).collect(),
         (0..n).map(|a| [0.2, f(a, 0.7), 1.0]).collect(),
-        (0..n).map(|a| [0.0, -0.5, f(a, 0.2) - 1.0]).collect(),
+        (0..n).map(|a| [0.4, -0.5, f(a, 0.2) - 1.0]).collect(),
     )
 }
 
@@ -241,4 +268,57 @@ fn a_truncated_basis_keeps_the_static_equilibrium() {
         }
     }
     assert!(low.left_out(&us, &vec![[0.0; 3]; n], &f).is_none());
+}
+
+/// A free membrane (K singular): the truncated basis finds the rigid mode (the shift lies below
+/// zero) and gives it exactly zero frequency, as the dense basis does, with the same elastic
+/// modes; a uniform translation under a uniform acceleration moves freely
+/// (`u₀ + v₀t + ½gt²` at every point), and the share left out and the static correction (K⁻¹)
+/// are not attempted.
+#[test]
+fn a_truncated_basis_of_a_free_membrane_keeps_its_rigid_mode() {
+    let (k, m) = free_membrane(16, 13);
+    let n = k.nrows();
+    let all = ModalBasis::all(&k, &m).unwrap();
+    let low = ModalBasis::lowest(&k, &m, 12).unwrap();
+    assert_eq!((all.lambda[0], low.lambda[0]), (0.0, 0.0));
+    assert_eq!(low.omega[0], 0.0);
+    for i in 1..12 {
+        assert!(low.lambda[i] > 0.0);
+        assert!(
+            (low.lambda[i] - all.lambda[i]).abs() <= LANCZOS * all.lambda[i],
+            "mode {i}: {} vs {}",
+            low.lambda[i],
+            all.lambda[i]
+        );
+    }
+    let (u0, v0, f) = excitation(n);
+    assert!(low.left_out(&u0, &v0, &f).is_none());
+    // A uniform translation under a uniform load: the rigid mode alone, x = x₀ + v t + ½ a t²
+    // with a = f / (mass per unit translation) the same at every point.
+    let u0 = vec![[0.1, -0.2, 0.3]; n];
+    let v0 = vec![[0.5, 0.0, -1.0]; n];
+    let mut ones = vec![0.0; n];
+    m.mul_vec(&vec![1.0; n], &mut ones);
+    // f = M·1 · g: a uniform acceleration g in every coordinate.
+    let g = [0.0, -2.0, 0.7];
+    let f: Vec<[f64; 3]> = ones
+        .iter()
+        .map(|&w| [w * g[0], w * g[1], w * g[2]])
+        .collect();
+    let watch = vec![vec![(0, 1.0)], vec![(n / 2, 1.0)]];
+    let times = [0.0, 0.5, 1.0, 2.5];
+    let (points, _) = low.response(&watch, &times, &u0, &v0, &f, None);
+    for p in 0..watch.len() {
+        for (s, &t) in times.iter().enumerate() {
+            for c in 0..3 {
+                let expected = u0[0][c] + v0[0][c] * t + 0.5 * g[c] * t * t;
+                assert!(
+                    (points[p][s][c] - expected).abs() < LANCZOS,
+                    "point {p} at {t}: {:?}",
+                    points[p][s]
+                );
+            }
+        }
+    }
 }
