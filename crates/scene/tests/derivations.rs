@@ -12,6 +12,10 @@ use nurbspring_dnurbs::DnurbsModel;
 use nurbspring_scene::Scene;
 use nurbspring_sim::{IntegratorKind, RunOptions, Sample};
 
+#[path = "support/sheet.rs"]
+mod support;
+use support::sheet_text;
+
 fn scene(name: &str) -> Scene {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let path = if name == "paper" || name == "string" {
@@ -253,36 +257,9 @@ fn linear_constraints_fall_back_to_the_paper() {
     assert_eq!(scene("paper").derivation(), (Method::Modal, None));
 }
 
-/// A flat 1 × 1 bicubic sheet with `n × n` control points at the Greville abscissae of uniform
-/// clamped knots, clamped by two rings, struck by a uniform initial velocity (the `derive`
-/// benchmark's sheet).
+/// The sheet of the `derive` benchmark (`support/sheet.rs`) with Δt = 0.05.
 fn sheet(n: usize) -> Scene {
-    let p = 3;
-    let inner = n - p - 1;
-    let mut knots = vec![0.0; p + 1];
-    knots.extend((1..=inner).map(|i| i as f64 / (inner + 1) as f64));
-    knots.extend(vec![1.0; p + 1]);
-    let greville: Vec<f64> = (0..n)
-        .map(|i| knots[i + 1..i + p + 1].iter().sum::<f64>() / p as f64)
-        .collect();
-    let rows: Vec<String> = greville
-        .iter()
-        .map(|x| {
-            let row: Vec<String> = greville
-                .iter()
-                .map(|y| format!("[{x:?}, {y:?}, 0.0]"))
-                .collect();
-            format!("  [{}],", row.join(", "))
-        })
-        .collect();
-    let text = format!(
-        "[surface]\ndegree_u = 3\ndegree_v = 3\nknots_u = {knots:?}\nknots_v = {knots:?}\n\
-         control_points = [\n{}\n]\n[material]\nmu = 1.0\nalpha11 = 1.0\nalpha22 = 1.0\n\
-         beta11 = 0.01\nbeta22 = 0.01\n[constraints]\nfixed_rings = 2\n[initial]\n\
-         velocity = [0.0, 0.0, -0.1]\n[simulation]\ndt = 0.05\nt_end = 20.0\n",
-        rows.join("\n")
-    );
-    Scene::from_str(&text, "sheet.toml").unwrap()
+    Scene::from_str(&sheet_text(n, 0.05), "sheet.toml").unwrap()
 }
 
 /// Above `DENSE_MODES` unknowns both models are followed through their lowest
