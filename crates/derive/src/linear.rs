@@ -441,17 +441,12 @@ pub fn derive_linear(
     let watch = node_watch(setup.probe_nodes(), &map.free, positions);
     let (msm_trajectory, _) =
         run_scalar(&node.system, &node.basis, &watch, &judge.times, judge.dt)?;
-    let run_name = |kind: crate::reference::ReferenceKind| match kind {
-        crate::reference::ReferenceKind::Modal => "modal".to_string(),
-        crate::reference::ReferenceKind::TruncatedModal => "truncated-modal".to_string(),
-        crate::reference::ReferenceKind::Newmark => "newmark".to_string(),
-    };
     let validation_main = validation(
         &setup,
         &reference.0,
         reference.1,
         &msm_trajectory,
-        run_name(reference.1),
+        reference.1.name().to_string(),
         1,
         judge.horizon,
         judge.dt,
@@ -471,7 +466,7 @@ pub fn derive_linear(
         &kick_reference.0,
         kick_reference.1,
         &kick_run,
-        run_name(kick_reference.1),
+        kick_reference.1.name().to_string(),
         1,
         judge.horizon,
         judge.dt,

@@ -41,12 +41,16 @@ pub struct ModalBasis {
     mass: SparseMatrix,
     /// The stiffness matrix (for the static correction and the share left out).
     stiffness: SparseMatrix,
+    /// Its factor, once a static solve asks for it (`None`: K is not positive definite).
+    stiffness_factor: OnceLock<Option<SpdSolver>>,
 }
 
-/// The static displacement of the modes left out, its energy terms: `c = (I − ΦΦᵀM) K⁻¹ f`
-/// per coordinate.
-struct StaticCorrection {
-    c: Vec<[f64; 3]>,
+/// `a − b`, per unknown and coordinate.
+fn minus(a: &[[f64; 3]], b: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+        .collect()
 }
 
 impl ModalBasis {
@@ -73,10 +77,8 @@ impl ModalBasis {
         if count >= k.nrows() {
             return Self::all(k, m);
         }
-        let (tk, tm) = (
-            k.diagonal().iter().sum::<f64>(),
-            m.diagonal().iter().sum::<f64>(),
-        );
+        let (kd, md) = (k.diagonal(), m.diagonal());
+        let (tk, tm) = (kd.iter().sum::<f64>(), md.iter().sum::<f64>());
         let shift = if tk > 0.0 && tm > 0.0 {
             -1e-6 * tk / tm
         } else {
@@ -86,11 +88,10 @@ impl ModalBasis {
         // The scale of the rigid-mode test: the largest of the diagonal Rayleigh quotients
         // `K_ii / M_ii` and the modes found, within a small factor of λ_max (which would cost a
         // Lanczos run of its own; `omega_max` computes it when asked).
-        let diagonal = k
-            .diagonal()
+        let diagonal = kd
             .iter()
-            .zip(m.diagonal())
-            .filter(|&(_, mi)| mi > 0.0)
+            .zip(&md)
+            .filter(|&(_, &mi)| mi > 0.0)
             .fold(0.0_f64, |a, (ki, mi)| a.max(ki.abs() / mi));
         let scale = eig.values.iter().fold(diagonal, |a, &l| a.max(l.abs()));
         Ok(Self::from_pairs(eig.values, eig.vectors, scale, k, m))
@@ -125,6 +126,7 @@ impl ModalBasis {
             vectors,
             mass: m.clone(),
             stiffness: k.clone(),
+            stiffness_factor: OnceLock::new(),
         }
     }
 
@@ -201,12 +203,15 @@ impl ModalBasis {
     }
 
     /// `K⁻¹ x` per coordinate, or `None` when K is singular (a rigid mode among those found;
-    /// they are the lowest, so a truncated basis has them all).
+    /// they are the lowest, so a truncated basis has them all). K is factored once.
     fn static_solve(&self, x: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
         if self.lambda.first() == Some(&0.0) {
             return None;
         }
-        let solver = SpdSolver::new(&self.stiffness).ok()?;
+        let solver = self
+            .stiffness_factor
+            .get_or_init(|| SpdSolver::new(&self.stiffness).ok())
+            .as_ref()?;
         let mut out = vec![[0.0; 3]; x.len()];
         for c in 0..3 {
             let mut col: Vec<f64> = x.iter().map(|p| p[c]).collect();
@@ -220,23 +225,17 @@ impl ModalBasis {
 
     /// `x − Φ Φᵀ M x`: the part of `x` in the modes left out.
     fn left_out_part(&self, x: &[[f64; 3]]) -> Vec<[f64; 3]> {
-        let kept = self.expand(&self.project_mass(x));
-        x.iter()
-            .zip(kept)
-            .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
-            .collect()
+        minus(x, &self.expand(&self.project_mass(x)))
     }
 
-    /// The static correction of a truncated basis under the load `f` (none when every mode is
-    /// kept, the load is zero or K is singular).
-    fn static_correction(&self, f: &[[f64; 3]]) -> Option<StaticCorrection> {
+    /// The static displacement of the modes left out under the load `f`,
+    /// `c = (I − ΦΦᵀM) K⁻¹ f` (none when every mode is kept, the load is zero or K is
+    /// singular).
+    fn static_correction(&self, f: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
         if self.is_complete() || f.iter().all(|p| p.iter().all(|&x| x == 0.0)) {
             return None;
         }
-        let us = self.static_solve(f)?;
-        Some(StaticCorrection {
-            c: self.left_out_part(&us),
-        })
+        Some(self.left_out_part(&self.static_solve(f)?))
     }
 
     /// The share of the motion from displacement `u0`, velocity `v0` and constant load `f`
@@ -249,12 +248,7 @@ impl ModalBasis {
         if self.is_complete() {
             return Some(0.0);
         }
-        let us = self.static_solve(f)?;
-        let w: Vec<[f64; 3]> = u0
-            .iter()
-            .zip(&us)
-            .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
-            .collect();
+        let w = minus(u0, &self.static_solve(f)?);
         let mv = apply3(&self.mass, v0);
         let z = self.static_solve(&mv)?;
         let total = dot(&w, &apply3(&self.mass, &w)) + dot(&mv, &z);
@@ -299,10 +293,10 @@ impl ModalBasis {
             .iter()
             .map(|w| {
                 let mut d = [0.0; 3];
-                if let Some(s) = &correction {
+                if let Some(cs) = &correction {
                     for &(a, c) in w {
                         for x in 0..3 {
-                            d[x] += c * s.c[a][x];
+                            d[x] += c * cs[a][x];
                         }
                     }
                 }
@@ -310,9 +304,9 @@ impl ModalBasis {
             })
             .collect();
         let (elastic_offset, external_offset) = match (&correction, energy) {
-            (Some(s), Some(e)) => (
-                dot(&e.internal, &s.c) + 0.5 * dot(&s.c, &apply3(&self.stiffness, &s.c)),
-                -dot(&e.force, &s.c),
+            (Some(c), Some(e)) => (
+                dot(&e.internal, c) + 0.5 * dot(c, &apply3(&self.stiffness, c)),
+                -dot(&e.force, c),
             ),
             _ => (0.0, 0.0),
         };

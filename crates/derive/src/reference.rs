@@ -29,6 +29,17 @@ pub enum ReferenceKind {
     Newmark,
 }
 
+impl ReferenceKind {
+    /// The name report.json gives it: `"modal"`, `"truncated-modal"` or `"newmark"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReferenceKind::Modal => "modal",
+            ReferenceKind::TruncatedModal => "truncated-modal",
+            ReferenceKind::Newmark => "newmark",
+        }
+    }
+}
+
 /// A point watched on a scalar system: its rest position and its weights on the unknowns
 /// (its displacement is `Σ_a w_a u_a`).
 #[derive(Clone, Debug, Default)]

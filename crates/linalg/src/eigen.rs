@@ -526,6 +526,9 @@ struct RitzPairs {
     converged: bool,
 }
 
+/// Lanczos steps between two convergence tests of [`lanczos_largest`].
+const CHECK_EVERY: usize = 5;
+
 /// Lanczos with full reorthogonalization for an operator `op` self-adjoint in the B-inner
 /// product, restricted to the B-orthogonal complement of `locked` (B-orthonormal vectors).
 /// Iterates until the `k` largest Ritz values have residual `≤ tol·|θ|`, the Krylov space is
@@ -533,9 +536,6 @@ struct RitzPairs {
 /// subspace (β = 0) it restarts with a fresh random vector, so multiple eigenvalues are found.
 /// Returns up to `k + extra` pairs.
 #[allow(clippy::too_many_arguments)]
-/// Lanczos steps between two convergence tests of [`lanczos_largest`].
-const CHECK_EVERY: usize = 5;
-
 fn lanczos_largest(
     n: usize,
     op: &mut dyn FnMut(&[f64], &mut [f64]),

@@ -174,9 +174,9 @@ fn validation_table(s: &mut String, rows: &[(&str, &Validation)]) {
     for (name, v) in rows {
         let _ = writeln!(
             s,
-            "| {name} | {} | {:?} | {:.3} | {:.4} | {:.4} | {} / {} | {} / {} |",
+            "| {name} | {} | {} | {:.3} | {:.4} | {:.4} | {} / {} | {} / {} |",
             v.integrator,
-            v.reference,
+            v.reference.name(),
             v.horizon,
             v.relative_rms,
             v.relative_rms_z,

@@ -304,11 +304,12 @@ fn a_large_net_is_validated_on_its_lowest_modes() {
         (ReferenceKind::TruncatedModal, ReferenceKind::Modal)
     );
     let c = nurbspring_derive::compare_points(&b.t, &b.probes[0], &a.probes[0]);
-    println!(
-        "left out {left_out:.3e}, central node {:.3e}",
+    // Measured: 2.1e-3 at the central node, 3.2e-3 left out.
+    assert!(
+        c.relative_rms <= left_out,
+        "{} vs {left_out}",
         c.relative_rms
     );
-    assert!(c.relative_rms < 0.01, "{}", c.relative_rms);
 }
 
 /// The memory estimate of `derive` on a large net counts the Lanczos bases of the truncated
