@@ -53,12 +53,14 @@ mod assembly;
 mod constraints;
 mod error;
 mod geometry;
+mod layout;
 mod loads;
 mod material;
 mod model;
 mod options;
 mod rational;
 mod run;
+mod shell;
 
 pub use assembly::{Assembler, Matrices, ScalarMatrices, assemble, assemble_scalar};
 pub use constraints::{Constraints, LinearConstraint};
@@ -75,3 +77,4 @@ pub use options::{
 };
 pub use rational::{DEFAULT_MIN_WEIGHT_RATIO, RationalStepper};
 pub use run::{integrator_problem, names as integrator_names};
+pub use shell::{ShellEnergy, ShellMaterial};
