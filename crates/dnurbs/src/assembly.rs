@@ -174,6 +174,11 @@ impl Assembler {
                 mass.scale(material.mu);
                 let mut damping = v.unit_mass;
                 damping.scale(material.gamma);
+                if !loads.edges.is_empty() {
+                    return Err(DnurbsError::InvalidLoad {
+                        detail: "edge loads need constant weights (weights_as_dofs = false)".into(),
+                    });
+                }
                 let mut force = v.force;
                 add_point_loads(geometry, loads, true, &mut force)?;
                 Ok(Matrices {
@@ -194,6 +199,8 @@ impl Assembler {
                     }
                 }
                 add_point_loads(geometry, loads, false, &mut force)?;
+                let points = self.options.quadrature_points.unwrap_or(1);
+                crate::edge::EdgeLoads::new(geometry, &loads.edges, points)?.add_forces(&mut force);
                 let unit = s.unit_mass.kron_identity(3);
                 let mut mass = unit.clone();
                 mass.scale(material.mu);

@@ -280,67 +280,106 @@ fn build_affine(
     }
     touched.sort_unstable();
     touched.dedup();
-    let mut local = vec![usize::MAX; n_free];
-    for (t, &i) in touched.iter().enumerate() {
-        local[i] = t;
-    }
-    let mut a = DenseMatrix::zeros(rows.len(), touched.len());
-    let mut b = vec![0.0; rows.len()];
-    for (r, (terms, rhs)) in rows.iter().enumerate() {
-        for &(i, coef) in terms {
-            a[(r, local[i])] += coef;
+    // Rows that share no dof are independent: each connected group of rows and dofs is solved
+    // on its own, so that G stays block-diagonal (a null space of all rows at once may mix
+    // independent groups whose singular values coincide, and fill the reduced matrices).
+    let mut parent: Vec<usize> = (0..n_free).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
         }
-        b[r] = *rhs;
+        i
     }
-    let (g_t, particular_t) = affine_solution_space(&a, &b, 1e-12).map_err(|e| match e {
-        LinalgError::Singular { detail } => DnurbsError::InvalidConstraint {
-            detail: format!(
-                "the {} linear constraints on the free dofs are inconsistent: {detail}",
-                rows.len()
-            ),
-        },
-        other => DnurbsError::Linalg(other),
-    })?;
-    // A consistent system is solved exactly by the particular solution.
-    let ag = a.mul_vec(&particular_t);
-    let b_norm = b.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let residual = ag
-        .iter()
-        .zip(&b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt();
-    if residual.is_nan() || residual > 1e-9 * b_norm.max(1.0) {
-        return Err(DnurbsError::InvalidConstraint {
-            detail: format!(
-                "the {} linear constraints are inconsistent: ‖A g − b‖ = {residual:e} (‖b‖ = {b_norm:e})",
-                rows.len()
-            ),
-        });
+    for (terms, _) in &rows {
+        let first = root(&mut parent, terms[0].0);
+        for &(i, _) in &terms[1..] {
+            let r = root(&mut parent, i);
+            parent[r] = first;
+        }
     }
-    // G: identity columns for untouched free dofs, then the null-space basis of the touched ones.
+    let mut groups: Vec<(Vec<usize>, Vec<usize>)> = Vec::new(); // (dofs, rows)
+    let mut group_of = vec![usize::MAX; n_free];
+    for &i in &touched {
+        let r = root(&mut parent, i);
+        if group_of[r] == usize::MAX {
+            group_of[r] = groups.len();
+            groups.push((Vec::new(), Vec::new()));
+        }
+        groups[group_of[r]].0.push(i);
+    }
+    for (k, (terms, _)) in rows.iter().enumerate() {
+        let r = root(&mut parent, terms[0].0);
+        groups[group_of[r]].1.push(k);
+    }
+    let mut is_touched = vec![false; n_free];
+    for &i in &touched {
+        is_touched[i] = true;
+    }
+    // G: identity columns for untouched free dofs, then each group's null-space basis.
     let mut triplets = Vec::new();
     let mut col = 0;
     for i in 0..n_free {
-        if local[i] == usize::MAX {
+        if !is_touched[i] {
             triplets.push((i, col, 1.0));
             col += 1;
         }
     }
-    for j in 0..g_t.ncols() {
-        for (t, &i) in touched.iter().enumerate() {
-            let v = g_t[(t, j)];
-            if v != 0.0 {
-                triplets.push((i, col, v));
-            }
+    let mut particular = vec![0.0; n_free];
+    let mut local = vec![usize::MAX; n_free];
+    for (dofs, group_rows) in &groups {
+        for (t, &i) in dofs.iter().enumerate() {
+            local[i] = t;
         }
-        col += 1;
+        let mut a = DenseMatrix::zeros(group_rows.len(), dofs.len());
+        let mut b = vec![0.0; group_rows.len()];
+        for (r, &k) in group_rows.iter().enumerate() {
+            let (terms, rhs) = &rows[k];
+            for &(i, coef) in terms {
+                a[(r, local[i])] += coef;
+            }
+            b[r] = *rhs;
+        }
+        let (g_t, particular_t) = affine_solution_space(&a, &b, 1e-12).map_err(|e| match e {
+            LinalgError::Singular { detail } => DnurbsError::InvalidConstraint {
+                detail: format!(
+                    "the {} linear constraints on the free dofs are inconsistent: {detail}",
+                    rows.len()
+                ),
+            },
+            other => DnurbsError::Linalg(other),
+        })?;
+        // A consistent system is solved exactly by the particular solution.
+        let ag = a.mul_vec(&particular_t);
+        let b_norm = b.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let residual = ag
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y) * (x - y))
+            .sum::<f64>()
+            .sqrt();
+        if residual.is_nan() || residual > 1e-9 * b_norm.max(1.0) {
+            return Err(DnurbsError::InvalidConstraint {
+                detail: format!(
+                    "the {} linear constraints are inconsistent: ‖A g − b‖ = {residual:e} (‖b‖ = {b_norm:e})",
+                    rows.len()
+                ),
+            });
+        }
+        for j in 0..g_t.ncols() {
+            for (t, &i) in dofs.iter().enumerate() {
+                let v = g_t[(t, j)];
+                if v != 0.0 {
+                    triplets.push((i, col, v));
+                }
+            }
+            col += 1;
+        }
+        for (t, &i) in dofs.iter().enumerate() {
+            particular[i] = particular_t[t];
+        }
     }
     let basis = SparseMatrix::from_triplets(n_free, col, &triplets)?;
-    let mut particular = vec![0.0; n_free];
-    for (t, &i) in touched.iter().enumerate() {
-        particular[i] = particular_t[t];
-    }
     Ok(Some(Affine {
         basis_t: basis.transpose(),
         basis,

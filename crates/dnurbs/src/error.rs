@@ -81,6 +81,21 @@ pub enum DnurbsError {
         /// Time.
         time: f64,
     },
+    /// The equilibrium path could not be followed beyond a load factor.
+    #[error(
+        "the equilibrium path stopped at load factor {lambda:.6}: Newton did not converge with \
+         load increments down to {increment:.1e} of the load (a limit point, a buckling, or a \
+         load the structure cannot carry)"
+    )]
+    PathStopped {
+        /// The last load factor reached.
+        lambda: f64,
+        /// The last increment tried.
+        increment: f64,
+    },
+    /// The run was cancelled (Ctrl-C).
+    #[error("cancelled")]
+    Cancelled,
     /// An error from the geometry crate.
     #[error(transparent)]
     Geom(#[from] GeomError),
@@ -107,8 +122,10 @@ impl DnurbsError {
             | DnurbsError::InvalidOption { .. }
             | DnurbsError::Geom(_) => ErrorKind::Input,
             DnurbsError::DimensionMismatch { .. }
+            | DnurbsError::PathStopped { .. }
             | DnurbsError::NonFinite { .. }
             | DnurbsError::Linalg(_) => ErrorKind::Run,
+            DnurbsError::Cancelled => ErrorKind::Cancelled,
             DnurbsError::Sim(e) => e.kind(),
         }
     }

@@ -51,6 +51,9 @@
 
 mod assembly;
 mod constraints;
+mod edge;
+mod elasticity;
+mod equilibrium;
 mod error;
 mod geometry;
 mod layout;
@@ -64,6 +67,9 @@ mod shell;
 
 pub use assembly::{Assembler, Matrices, ScalarMatrices, assemble, assemble_scalar};
 pub use constraints::{Constraints, LinearConstraint};
+pub use edge::{Edge, EdgeLoad};
+pub use elasticity::{ElasticEnergy, TensionPlate};
+pub use equilibrium::{Cancel, EquilibriumPath, LoadLevel, PathSettings};
 pub use error::DnurbsError;
 pub use geometry::{Geometry, outer_ring_points};
 pub use loads::{Loads, PointLoad};

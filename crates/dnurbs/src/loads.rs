@@ -1,7 +1,7 @@
 //! External loads (docs/math.md §3): gravity as a force density `μ g`, a constant distributed force
 //! density, and point loads `J(u0, v0)ᵀ F`.
 
-use crate::{DnurbsError, Geometry};
+use crate::{DnurbsError, EdgeLoad, Geometry};
 
 /// A concentrated force `F` at the surface point `c(u, v)`: generalized force `J(u, v)ᵀ F`
 /// (docs/math.md §3). For curves `v` is ignored.
@@ -27,6 +27,8 @@ pub struct Loads {
     pub distributed: [f64; 3],
     /// Point loads.
     pub point: Vec<PointLoad>,
+    /// Loads on boundary edges (surfaces, constant weights; moments only on the shell).
+    pub edges: Vec<EdgeLoad>,
 }
 
 impl Loads {
@@ -35,6 +37,10 @@ impl Loads {
         self.gravity == [0.0; 3]
             && self.distributed == [0.0; 3]
             && self.point.iter().all(|p| p.force == [0.0; 3])
+            && self
+                .edges
+                .iter()
+                .all(|e| e.force == [0.0; 3] && e.moment == 0.0)
     }
 
     /// The constant force density `μ g + distributed` (docs/math.md §3).

@@ -16,10 +16,14 @@ use nurbspring_linalg::{
 };
 use nurbspring_sim::{DofMap, DynamicModel, State, SystemMatrix};
 
+use std::sync::Arc;
+
 use crate::constraints::Reduction;
+use crate::edge::EdgeLoads;
+use crate::elasticity::{ElasticEnergy, TensionPlate};
 use crate::{
-    Constraints, DnurbsError, DnurbsOptions, Geometry, Loads, Material, Matrices, QuadratureChoice,
-    RestShape, assemble,
+    Constraints, DnurbsError, DnurbsOptions, Geometry, Integration, Loads, Material, Matrices,
+    QuadratureChoice, RestShape, ShellEnergy, ShellMaterial, assemble,
 };
 
 /// Largest reduced system for which [`DnurbsModel::modes`] uses the dense generalized
@@ -133,10 +137,16 @@ pub struct DnurbsModel {
     mass_r: SystemMatrix,
     damping_r: Option<SystemMatrix>,
     stiffness_r: SparseMatrix,
-    /// `Pᵀ K (o − p_rest)`: `f_int(0)`.
+    /// `Pᵀ K (o − p_rest)`: `f_int(0)` (the shell: of its linearization at rest).
     f_int0: Vec<f64>,
     /// `Pᵀ f`.
-    f_ext: Vec<f64>,
+    pub(crate) f_ext: Vec<f64>,
+    /// The Kirchhoff–Love shell energy, when the model is a shell (docs/math.md §10); `None`:
+    /// the tension plate of `material`.
+    pub(crate) shell: Option<Arc<ShellEnergy>>,
+    /// The edge loads' quadrature (their forces are in `f_ext`; the shell's moments enter the
+    /// equilibrium path).
+    pub(crate) edge_loads: EdgeLoads,
 }
 
 impl DnurbsModel {
@@ -152,6 +162,21 @@ impl DnurbsModel {
         material.validate(geometry.is_curve())?;
         loads.validate(&geometry)?;
         options.validate()?;
+        if let Some((i, e)) = loads
+            .edges
+            .iter()
+            .enumerate()
+            .find(|(_, e)| e.moment != 0.0)
+        {
+            return Err(DnurbsError::InvalidLoad {
+                detail: format!(
+                    "edge load {i} on {} has a moment ({}): moments need the Kirchhoff–Love \
+                     shell (the tension plate has no rotations)",
+                    e.edge.name(),
+                    e.moment
+                ),
+            });
+        }
         let quadrature = options.quadrature_for(&geometry)?;
         let options = DnurbsOptions {
             quadrature_points: Some(quadrature.points),
@@ -199,7 +224,131 @@ impl DnurbsModel {
             stiffness_r,
             f_int0,
             f_ext,
+            shell: None,
+            edge_loads: EdgeLoads::default(),
         })
+    }
+
+    /// A Kirchhoff–Love shell (docs/math.md §10): the energy of [`ShellEnergy`] over the
+    /// control points of `geometry` (a surface, its own rest shape), the mass
+    /// `ρt ∫ R Rᵀ dA ⊗ I₃`, damping `γ ∫ R Rᵀ dA ⊗ I₃`, gravity `ρt g` and distributed loads
+    /// per unit area (all integrated over the rest surface), point loads as for the tension
+    /// plate; constraints as for the tension plate.
+    ///
+    /// The options' `integrate_over` is set to the area and the quadrature rule is chosen for
+    /// the shell (docs/math.md §10.4); `weights_as_dofs` (the weights are geometry) and
+    /// `rest_shape = "zero"` (the rest shape is the surface) are refused. The model is
+    /// nonlinear: [`DynamicModel::internal_force`] and [`DynamicModel::tangent_stiffness`]
+    /// evaluate the shell at the state, [`DnurbsModel::modes`] and
+    /// [`DnurbsModel::reduced_stiffness`] use the tangent at rest, and
+    /// [`DnurbsModel::equilibrium_path`] solves the nonlinear equilibrium.
+    pub fn kirchhoff_love(
+        geometry: Geometry,
+        shell: ShellMaterial,
+        loads: Loads,
+        constraints: &Constraints,
+        options: DnurbsOptions,
+    ) -> Result<Self, DnurbsError> {
+        shell.validate()?;
+        if geometry.is_curve() {
+            return Err(DnurbsError::InvalidOption {
+                name: "model",
+                value: "kirchhoff-love".into(),
+                reason: "the Kirchhoff–Love shell needs a surface, not a curve".into(),
+            });
+        }
+        if options.weights_as_dofs {
+            return Err(DnurbsError::InvalidOption {
+                name: "weights_as_dofs",
+                value: "true".into(),
+                reason: "the shell's weights are part of its geometry, not unknowns".into(),
+            });
+        }
+        if options.rest_shape != RestShape::Initial {
+            return Err(DnurbsError::InvalidOption {
+                name: "rest_shape",
+                value: options.rest_shape.name().into(),
+                reason: "the shell's rest shape is the surface given".into(),
+            });
+        }
+        loads.validate(&geometry)?;
+        options.validate()?;
+        let options = DnurbsOptions {
+            integration: Integration::Area,
+            ..options
+        };
+        let quadrature = crate::shell::quadrature(&geometry, &shell, &options)?;
+        let options = DnurbsOptions {
+            quadrature_points: Some(quadrature.points),
+            ..options
+        };
+        let energy = ShellEnergy::new(&geometry, &shell, quadrature.points)?;
+        let material = Material {
+            mu: shell.mass_per_area(),
+            gamma: shell.gamma,
+            ..Material::default()
+        };
+        let p0 = geometry.coordinates(false);
+        let reduction = Reduction::new(&geometry, constraints, false, &p0)?;
+        let mut matrices = assemble(&geometry, &material, &loads, &options)?;
+        matrices.stiffness = energy.tangent(&p0);
+        let edge_loads = EdgeLoads::new(&geometry, &loads.edges, quadrature.points)?;
+        let stiffness_r = reduction.reduce_matrix(&matrices.stiffness)?;
+        let mass_r = SystemMatrix::Sparse(reduction.reduce_matrix(&matrices.mass)?);
+        let damping_r = if material.gamma > 0.0 {
+            Some(SystemMatrix::Sparse(
+                reduction.reduce_matrix(&matrices.damping)?,
+            ))
+        } else {
+            None
+        };
+        let f_ext = reduction.reduce_vector(&matrices.force);
+        // The linearization at rest: f_int(q) ≈ K_r q + Pᵀ K_T (o − p0).
+        let diff: Vec<f64> = reduction
+            .offset
+            .iter()
+            .zip(&p0)
+            .map(|(o, r)| o - r)
+            .collect();
+        let mut k_diff = vec![0.0; diff.len()];
+        matrices.stiffness.mul_vec(&diff, &mut k_diff);
+        let f_int0 = reduction.reduce_vector(&k_diff);
+        Ok(Self {
+            geometry,
+            material,
+            loads,
+            options,
+            quadrature,
+            matrices,
+            f_int0,
+            reduction,
+            p_rest: p0.clone(),
+            p0,
+            mass_r,
+            damping_r,
+            stiffness_r,
+            f_ext,
+            shell: Some(Arc::new(energy)),
+            edge_loads,
+        })
+    }
+
+    /// The shell's energy, when the model is a Kirchhoff–Love shell.
+    pub fn shell(&self) -> Option<&ShellEnergy> {
+        self.shell.as_deref()
+    }
+
+    /// The elastic energy over all generalized coordinates: the shell's, or the tension
+    /// plate's `½ (p − p_rest)ᵀ K (p − p_rest)` (constant weights; with weights as unknowns
+    /// the plate of the initial shape).
+    pub fn elasticity(&self) -> Box<dyn ElasticEnergy + '_> {
+        match &self.shell {
+            Some(shell) => Box::new(shell.as_ref()),
+            None => Box::new(TensionPlate {
+                stiffness: &self.matrices.stiffness,
+                rest: &self.p_rest,
+            }),
+        }
     }
 
     /// The geometry at `t = 0`.
@@ -355,14 +504,26 @@ impl DnurbsModel {
         state
     }
 
-    /// The elastic energy `½ (p − p_rest)ᵀ K (p − p_rest)` of a full `p` (docs/math.md §3).
+    /// The elastic energy of a full `p`: `½ (p − p_rest)ᵀ K (p − p_rest)` (docs/math.md §3), or
+    /// the shell's (§10).
     pub fn elastic_energy(&self, p_full: &[f64]) -> f64 {
-        let d: Vec<f64> = p_full
-            .iter()
-            .zip(&self.p_rest)
-            .map(|(a, b)| a - b)
-            .collect();
-        0.5 * self.matrices.stiffness.quadratic_form(&d)
+        self.elasticity().energy(p_full)
+    }
+
+    /// The shell's internal force on the reduced coordinates, `Pᵀ f(P q + o)`.
+    fn shell_force(&self, shell: &ShellEnergy, q: &[f64]) -> Vec<f64> {
+        let p = self.reduction.to_full(q);
+        let mut f = vec![0.0; p.len()];
+        shell.internal_force(&p, &mut f);
+        self.reduction.reduce_vector(&f)
+    }
+
+    /// The shell's tangent on the reduced coordinates, `Pᵀ K_T(P q + o) P`.
+    fn shell_tangent(&self, shell: &ShellEnergy, q: &[f64]) -> SparseMatrix {
+        let k = shell.tangent(&self.reduction.to_full(q));
+        self.reduction
+            .reduce_matrix(&k)
+            .expect("the reduction of a matrix on the model's own pattern")
     }
 
     /// Steady state (paper eq. (8), docs/math.md §3): the full `p` at rest, solving
@@ -622,18 +783,27 @@ impl DynamicModel for DnurbsModel {
         self.damping_r.as_ref()
     }
 
-    /// `f_int(q) = K_r q + Pᵀ K (o − p_rest)` (docs/math.md §3–4).
+    /// `f_int(q) = K_r q + Pᵀ K (o − p_rest)` (docs/math.md §3–4); the shell's `Pᵀ f(P q + o)`
+    /// (§10).
     fn internal_force(&self, q: &[f64], out: &mut [f64]) {
-        out.copy_from_slice(&self.f_int0);
-        self.stiffness_r.mul_vec_add(1.0, q, out);
+        match &self.shell {
+            None => {
+                out.copy_from_slice(&self.f_int0);
+                self.stiffness_r.mul_vec_add(1.0, q, out);
+            }
+            Some(shell) => out.copy_from_slice(&self.shell_force(shell, q)),
+        }
     }
 
     fn external_force(&self, _t: f64, out: &mut [f64]) {
         out.copy_from_slice(&self.f_ext);
     }
 
-    fn tangent_stiffness(&self, _q: &[f64]) -> SparseMatrix {
-        self.stiffness_r.clone()
+    fn tangent_stiffness(&self, q: &[f64]) -> SparseMatrix {
+        match &self.shell {
+            None => self.stiffness_r.clone(),
+            Some(shell) => self.shell_tangent(shell, q),
+        }
     }
 
     fn potential_energy(&self, q: &[f64]) -> f64 {
@@ -641,7 +811,10 @@ impl DynamicModel for DnurbsModel {
     }
 
     fn linear_stiffness(&self) -> Option<&SparseMatrix> {
-        Some(&self.stiffness_r)
+        match &self.shell {
+            None => Some(&self.stiffness_r),
+            Some(_) => None,
+        }
     }
 
     fn external_potential(&self, _t: f64, q: &[f64]) -> f64 {

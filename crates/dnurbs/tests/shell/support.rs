@@ -100,3 +100,159 @@ pub fn rotate(r: &[[f64; 3]; 3], p: &[f64], shift: [f64; 3]) -> Vec<f64> {
 pub fn max_abs(x: &[f64]) -> f64 {
     x.iter().fold(0.0, |m, v| m.max(v.abs()))
 }
+
+// ---- Geometries of the benchmarks ----
+
+use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, LinearConstraint, Loads};
+
+/// `coarse` elevated to `degree` in both directions and split into `spans` equal spans per
+/// direction (a Bézier patch on [0, 1]²).
+pub fn refined(coarse: &NurbsSurface, degree: usize, spans: (usize, usize)) -> NurbsSurface {
+    let (pu, pv) = (coarse.basis_u().degree(), coarse.basis_v().degree());
+    let (e, _) = coarse.elevate_degree(degree - pu, degree - pv).unwrap();
+    let inner = |n: usize| -> Vec<f64> { (1..n).map(|k| k as f64 / n as f64).collect() };
+    e.refine_knots(&inner(spans.0), &inner(spans.1)).unwrap().0
+}
+
+/// A flat rectangle `[0, a] × [0, b]` in the plane z = 0 (bilinear Bézier patch).
+pub fn rectangle(a: f64, b: f64) -> NurbsSurface {
+    let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+    let pts = vec![[0., 0., 0.], [0., b, 0.], [a, 0., 0.], [a, b, 0.]];
+    NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 4]).unwrap()
+}
+
+/// A cylindrical sector: axis x over `[0, length]`, radius `r`, the arc from angle `a0` to
+/// `a1` (< π apart) in the y-z plane, angle measured from +y towards +z. u along x (linear),
+/// v along the arc (one rational quadratic segment).
+pub fn cylinder_sector(r: f64, length: f64, a0: f64, a1: f64) -> NurbsSurface {
+    let half = 0.5 * (a1 - a0);
+    let mid = 0.5 * (a0 + a1);
+    let arc = [
+        [r * a0.cos(), r * a0.sin()],
+        [r / half.cos() * mid.cos(), r / half.cos() * mid.sin()],
+        [r * a1.cos(), r * a1.sin()],
+    ];
+    let w = [1.0, half.cos(), 1.0];
+    let mut pts = Vec::new();
+    let mut weights = Vec::new();
+    for x in [0.0, length] {
+        for (c, &wk) in arc.iter().zip(&w) {
+            pts.push([x, c[0], c[1]]);
+            weights.push(wk);
+        }
+    }
+    let ku = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+    let kv = KnotVector::try_new(vec![0., 0., 0., 1., 1., 1.], 2).unwrap();
+    NurbsSurface::try_new(ku, kv, pts, weights).unwrap()
+}
+
+/// A quarter of a spherical zone of radius `r` about the z axis: u along the meridian from the
+/// equator (latitude 0) to latitude `top`, v along the parallel from longitude 0 (+x) to 90°
+/// (+y). Biquadratic rational (one segment each way).
+pub fn sphere_zone(r: f64, top: f64) -> NurbsSurface {
+    let half = 0.5 * top;
+    // Meridian in (ρ, z): from (r, 0) to (r cos top, r sin top).
+    let meridian = [
+        [r, 0.0],
+        [r / half.cos() * half.cos(), r / half.cos() * half.sin()],
+        [r * top.cos(), r * top.sin()],
+    ];
+    let wm = [1.0, half.cos(), 1.0];
+    // Quarter parallel in (x, y) for unit radius.
+    let parallel = [[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    let wp = [1.0, std::f64::consts::FRAC_1_SQRT_2, 1.0];
+    let mut pts = Vec::new();
+    let mut weights = Vec::new();
+    for (m, &w1) in meridian.iter().zip(&wm) {
+        for (c, &w2) in parallel.iter().zip(&wp) {
+            pts.push([m[0] * c[0], m[0] * c[1], m[1]]);
+            weights.push(w1 * w2);
+        }
+    }
+    let k = KnotVector::try_new(vec![0., 0., 0., 1., 1., 1.], 2).unwrap();
+    NurbsSurface::try_new(k.clone(), k, pts, weights).unwrap()
+}
+
+/// `p0` values of the generalized coordinates of `s` (3 per point).
+pub fn coordinates(s: &NurbsSurface) -> Vec<f64> {
+    s.control_points()
+        .iter()
+        .flat_map(|x| x.iter().copied())
+        .collect()
+}
+
+/// Holds dof `component` of control point `k` at its value in `p0`.
+pub fn hold(k: usize, component: usize, p0: &[f64]) -> LinearConstraint {
+    LinearConstraint {
+        terms: vec![(3 * k + component, 1.0)],
+        rhs: p0[3 * k + component],
+    }
+}
+
+/// Keeps the displacement `component` of points `a` and `b` equal.
+pub fn tie(a: usize, b: usize, component: usize, p0: &[f64]) -> LinearConstraint {
+    LinearConstraint {
+        terms: vec![(3 * a + component, 1.0), (3 * b + component, -1.0)],
+        rhs: p0[3 * a + component] - p0[3 * b + component],
+    }
+}
+
+/// A symmetry plane through the edge row `first` (its points), normal to axis `normal`, with
+/// `second` the next row inwards (docs/math.md §10.7): the first row stays on the plane and the
+/// in-plane displacements of the second row follow the first's, so the cross tangent stays
+/// normal to the plane.
+pub fn symmetry(
+    first: &[usize],
+    second: &[usize],
+    normal: usize,
+    p0: &[f64],
+) -> Vec<LinearConstraint> {
+    let mut out = Vec::new();
+    for (&a, &b) in first.iter().zip(second) {
+        out.push(hold(a, normal, p0));
+        for c in (0..3).filter(|&c| c != normal) {
+            out.push(tie(b, a, c, p0));
+        }
+    }
+    out
+}
+
+/// Flat indices of row `i` (fixed u index) of an `n_u × n_v` net.
+pub fn row_u(s: &NurbsSurface, i: usize) -> Vec<usize> {
+    (0..s.n_v()).map(|j| i * s.n_v() + j).collect()
+}
+
+/// Flat indices of column `j` (fixed v index).
+pub fn row_v(s: &NurbsSurface, j: usize) -> Vec<usize> {
+    (0..s.n_u()).map(|i| i * s.n_v() + j).collect()
+}
+
+/// A shell model of `s` with the linear constraints and loads given.
+pub fn shell_model(
+    s: NurbsSurface,
+    material: ShellMaterial,
+    loads: Loads,
+    linear: Vec<LinearConstraint>,
+    fixed_points: Vec<usize>,
+) -> DnurbsModel {
+    let constraints = Constraints {
+        fixed_points,
+        linear,
+        ..Constraints::default()
+    };
+    DnurbsModel::kirchhoff_love(
+        Geometry::Surface(s),
+        material,
+        loads,
+        &constraints,
+        DnurbsOptions::default(),
+    )
+    .unwrap()
+}
+
+/// The displacement of the surface point `(u, v)` in the state `p`.
+pub fn displacement(model: &DnurbsModel, u: f64, v: f64, p: &[f64]) -> [f64; 3] {
+    let a = model.point(u, v, p).unwrap();
+    let b = model.point(u, v, model.p0()).unwrap();
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
