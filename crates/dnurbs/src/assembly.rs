@@ -862,6 +862,7 @@ mod tests {
             gravity: [0.5, -9.81, 0.0],
             distributed: [0.25, 0.0, 1.5],
             point: Vec::new(),
+            edges: Vec::new(),
         };
         let general = GeneralAssembler::new(geometry, g, 3).unwrap().run(
             geometry,

@@ -312,7 +312,8 @@ impl DnurbsModel {
             }
             let trial: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
             let (r_trial, scale_trial) = self.residual(&trial, lambda);
-            if norm(&r_trial) < rn || !(dot(&r, &dq) < 0.0) {
+            let descent = dot(&r, &dq) < 0.0;
+            if norm(&r_trial) < rn || !descent {
                 q.copy_from_slice(&trial);
                 (r, scale) = (r_trial, scale_trial);
                 continue;

@@ -157,6 +157,7 @@ impl Scene {
                     force: p.force,
                 })
                 .collect(),
+            edges: Vec::new(),
         }
     }
 

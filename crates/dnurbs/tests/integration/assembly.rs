@@ -323,6 +323,7 @@ fn loads_sum_to_the_applied_force() {
             v: 0.6,
             force: [1.0, -2.0, 3.0],
         }],
+        edges: Vec::new(),
     };
     let m = assemble(
         &g,
