@@ -56,12 +56,33 @@ fn symmetric_part(a: &DenseMatrix) -> Mat<f64> {
 }
 
 fn faer_evd(a: &Mat<f64>, what: &'static str) -> Result<(Vec<f64>, Mat<f64>), LinalgError> {
-    let evd = a
+    // faer 0.24's divide and conquer loses accuracy on matrices of large norm (measured:
+    // eigenvalue errors of 9e-7 ‖A‖ for n = 675 at ‖A‖ = 1e10, round-off at ‖A‖ = 1): the
+    // matrix is scaled to unit max-norm first and the eigenvalues scaled back.
+    let scale = max_abs(a);
+    let scaled = if scale > 0.0 && scale.is_finite() {
+        Mat::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)] / scale)
+    } else {
+        a.to_owned()
+    };
+    let unscale = if scale > 0.0 && scale.is_finite() { scale } else { 1.0 };
+    let evd = scaled
         .self_adjoint_eigen(Side::Lower)
         .map_err(|e| LinalgError::Faer(format!("{what}: {e:?}")))?;
     let s = evd.S().column_vector();
-    let values = (0..a.nrows()).map(|i| s[i]).collect();
+    let values = (0..a.nrows()).map(|i| s[i] * unscale).collect();
     Ok((values, evd.U().to_owned()))
+}
+
+/// The largest absolute entry.
+fn max_abs(a: &Mat<f64>) -> f64 {
+    let mut m = 0.0_f64;
+    for j in 0..a.ncols() {
+        for i in 0..a.nrows() {
+            m = m.max(a[(i, j)].abs());
+        }
+    }
+    m
 }
 
 /// `A = Q Λ Qᵀ` for a dense symmetric A (faer's self-adjoint EVD: Householder
@@ -103,9 +124,16 @@ pub fn symmetric_eigenvalues(a: &DenseMatrix) -> Result<Vec<f64>, LinalgError> {
     if a.nrows() == 0 {
         return Ok(Vec::new());
     }
-    let mut values = symmetric_part(a)
+    // Scaled to unit max-norm as in `faer_evd`.
+    let sym = symmetric_part(a);
+    let scale = max_abs(&sym);
+    let unscale = if scale > 0.0 && scale.is_finite() { scale } else { 1.0 };
+    let mut values = Mat::from_fn(sym.nrows(), sym.ncols(), |i, j| sym[(i, j)] / unscale)
         .self_adjoint_eigenvalues(Side::Lower)
         .map_err(|e| LinalgError::Faer(format!("symmetric_eigenvalues: {e:?}")))?;
+    for v in &mut values {
+        *v *= unscale;
+    }
     values.sort_by(f64::total_cmp);
     Ok(values)
 }
