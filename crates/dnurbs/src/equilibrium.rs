@@ -6,6 +6,19 @@ use nurbspring_sim::DynamicModel;
 
 use crate::{DnurbsError, DnurbsModel};
 
+/// The Armijo fraction of the line search.
+const ARMIJO: f64 = 1e-4;
+/// Halvings of a Newton step before the smallest is taken.
+const MAX_HALVINGS: usize = 12;
+/// Relative residual below which Newton steps are taken whole (the potential's changes are
+/// then at its round-off).
+const LINE_SEARCH_FROM: f64 = 1e-6;
+
+/// An increment converged in at most this many Newton iterations lets the next grow by 1.5.
+const EASY_ITERATIONS: usize = 5;
+/// An increment that needed at least this many halves the next.
+const HARD_ITERATIONS: usize = 12;
+
 /// Settings of [`DnurbsModel::equilibrium_path`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathSettings {
@@ -107,9 +120,10 @@ impl DnurbsModel {
     /// nonlinear one (the shell) is followed by load increments: each starts from a predictor
     /// (the tangent at the last state, then the secant of the last two), Newton's method
     /// with the consistent tangent (Cholesky, LU once it is indefinite) and a backtracking line
-    /// search on the total potential `E(q) − λ fᵀq` whenever a full step raises the residual;
-    /// an increment converged in few iterations lets the next grow by 1.5 (up to the next
-    /// recorded level), one that fails is halved, down to `settings.min_increment`.
+    /// search on the total potential `E(q) − λ fᵀq − λ W(q)` whenever a full step raises the
+    /// residual. After at most 5 iterations the next increment grows by 1.5, after 12 or more
+    /// it is halved (never past the next recorded level); an increment that fails is halved
+    /// and retried, down to `settings.min_increment`.
     /// `progress(λ)` is called after each increment; `cancel()` is polled between Newton
     /// iterations.
     pub fn equilibrium_path(
@@ -119,7 +133,6 @@ impl DnurbsModel {
         progress: &mut dyn FnMut(f64),
     ) -> Result<EquilibriumPath, DnurbsError> {
         let levels = settings.levels.max(1);
-        let n = self.n_dofs();
         let mut out = EquilibriumPath {
             levels: Vec::with_capacity(levels),
             increments: 0,
@@ -155,7 +168,8 @@ impl DnurbsModel {
             spd: None,
             lu: None,
         };
-        let mut q = vec![0.0; n];
+        let q_rest = self.reduction.reduce_coordinates(&self.p0);
+        let mut q = q_rest.clone();
         let mut q_previous: Option<(Vec<f64>, f64)> = None;
         let mut lambda = 0.0;
         let mut increment = 1.0 / levels as f64;
@@ -173,7 +187,14 @@ impl DnurbsModel {
             };
             let step = lambda_new - lambda;
             let mut trial = self.predict(&q, q_previous.as_ref(), lambda, step, &mut factor)?;
-            match self.newton(&mut trial, lambda_new, settings, cancel, &mut factor)? {
+            match self.newton(
+                &mut trial,
+                &q_rest,
+                lambda_new,
+                settings,
+                cancel,
+                &mut factor,
+            )? {
                 Newton::Converged {
                     residual,
                     iterations,
@@ -191,9 +212,14 @@ impl DnurbsModel {
                         });
                         next_level += 1;
                     }
-                    if iterations <= 5 {
-                        increment = (1.5 * step).max(increment);
-                    }
+                    // Few iterations: the next increment may grow; many: it shrinks.
+                    increment = if iterations <= EASY_ITERATIONS {
+                        (1.5 * step).max(increment)
+                    } else if iterations >= HARD_ITERATIONS {
+                        (0.5 * step).max(settings.min_increment)
+                    } else {
+                        increment.max(step)
+                    };
                 }
                 Newton::Failed { iterations } => {
                     out.iterations += iterations;
@@ -283,6 +309,7 @@ impl DnurbsModel {
     fn newton(
         &self,
         q: &mut [f64],
+        q_rest: &[f64],
         lambda: f64,
         settings: &PathSettings,
         cancel: Cancel<'_>,
@@ -305,34 +332,50 @@ impl DnurbsModel {
                 });
             }
             let k = self.path_tangent(q, lambda)?;
+            if !k.all_finite() {
+                return Ok(Newton::Failed { iterations: it + 1 });
+            }
             let minus_r: Vec<f64> = r.iter().map(|x| -x).collect();
             let dq = factor.solve(&k, &minus_r)?;
             if dq.iter().any(|x| !x.is_finite()) {
                 return Ok(Newton::Failed { iterations: it + 1 });
             }
-            let trial: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
-            let (r_trial, scale_trial) = self.residual(&trial, lambda);
-            let descent = dot(&r, &dq) < 0.0;
-            if norm(&r_trial) < rn || !descent {
-                q.copy_from_slice(&trial);
-                (r, scale) = (r_trial, scale_trial);
-                continue;
-            }
-            // Backtracking on the total potential along the descent direction dq.
-            let slope = dot(&r, &dq);
-            let mut alpha = 0.5;
-            let mut accepted = false;
-            for _ in 0..12 {
-                let t: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + alpha * b).collect();
-                if self.potential_change(q, &t, lambda) <= 1e-4 * alpha * slope {
-                    q.copy_from_slice(&t);
-                    accepted = true;
-                    break;
+            // The residual's floor is the round-off of f_int, whose terms can be far larger
+            // than the load (a stiff membrane under a small load): a Newton correction below
+            // the tolerance relative to the displacement from rest is convergence too.
+            let moved = norm(
+                &q.iter()
+                    .zip(q_rest)
+                    .map(|(a, b)| a - b)
+                    .collect::<Vec<f64>>(),
+            );
+            if norm(&dq) <= settings.tolerance * moved {
+                for (a, b) in q.iter_mut().zip(&dq) {
+                    *a += b;
                 }
-                alpha *= 0.5;
+                let (r, scale) = self.residual(q, lambda);
+                return Ok(Newton::Converged {
+                    residual: if scale > 0.0 { norm(&r) / scale } else { 0.0 },
+                    iterations: it + 1,
+                });
             }
-            if !accepted {
-                q.copy_from_slice(&trial);
+            // A descent direction (positive definite tangent) far from convergence is
+            // accepted by the Armijo test on the total potential, halving the step until it
+            // lowers the potential enough; near convergence (where the potential's changes
+            // are round-off) and along a direction of ascent the full step is taken.
+            let slope = dot(&r, &dq);
+            let mut alpha = 1.0;
+            if slope < 0.0 && rn > LINE_SEARCH_FROM * scale {
+                for _ in 0..MAX_HALVINGS {
+                    let t: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + alpha * b).collect();
+                    if self.potential_change(q, &t, lambda) <= ARMIJO * alpha * slope {
+                        break;
+                    }
+                    alpha *= 0.5;
+                }
+            }
+            for (a, b) in q.iter_mut().zip(&dq) {
+                *a += alpha * b;
             }
             (r, scale) = self.residual(q, lambda);
         }

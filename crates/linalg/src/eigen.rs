@@ -65,7 +65,11 @@ fn faer_evd(a: &Mat<f64>, what: &'static str) -> Result<(Vec<f64>, Mat<f64>), Li
     } else {
         a.to_owned()
     };
-    let unscale = if scale > 0.0 && scale.is_finite() { scale } else { 1.0 };
+    let unscale = if scale > 0.0 && scale.is_finite() {
+        scale
+    } else {
+        1.0
+    };
     let evd = scaled
         .self_adjoint_eigen(Side::Lower)
         .map_err(|e| LinalgError::Faer(format!("{what}: {e:?}")))?;
@@ -127,7 +131,11 @@ pub fn symmetric_eigenvalues(a: &DenseMatrix) -> Result<Vec<f64>, LinalgError> {
     // Scaled to unit max-norm as in `faer_evd`.
     let sym = symmetric_part(a);
     let scale = max_abs(&sym);
-    let unscale = if scale > 0.0 && scale.is_finite() { scale } else { 1.0 };
+    let unscale = if scale > 0.0 && scale.is_finite() {
+        scale
+    } else {
+        1.0
+    };
     let mut values = Mat::from_fn(sym.nrows(), sym.ncols(), |i, j| sym[(i, j)] / unscale)
         .self_adjoint_eigenvalues(Side::Lower)
         .map_err(|e| LinalgError::Faer(format!("symmetric_eigenvalues: {e:?}")))?;

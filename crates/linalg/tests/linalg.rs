@@ -877,7 +877,9 @@ fn symmetric_eigen_is_exact_to_round_off_at_large_norm() {
         q.push(v.into_iter().map(|x| x / norm).collect());
     }
     let norm = 1e10;
-    let lambda: Vec<f64> = (0..n).map(|i| norm * ((i + 1) as f64 / n as f64).powi(4)).collect();
+    let lambda: Vec<f64> = (0..n)
+        .map(|i| norm * ((i + 1) as f64 / n as f64).powi(4))
+        .collect();
     let mut a = DenseMatrix::zeros(n, n);
     for k in 0..n {
         for j in 0..n {

@@ -2,5 +2,7 @@
 
 mod support;
 
+mod analytic;
 mod derivatives;
+mod large_deflection;
 mod obstacle;
