@@ -22,6 +22,50 @@ pub struct LinearConstraint {
     pub rhs: f64,
 }
 
+/// A boundary condition along one edge of a surface's control net, resolved into held dofs
+/// and linear constraints on the edge row (the control points of the edge) and the next row
+/// inwards (docs/math.md §4, §10.7).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EdgeCondition {
+    /// Both rows held: zero displacement and zero slope across the edge.
+    Clamped,
+    /// The edge row held: zero displacement, the rotation about the edge free (a hinge).
+    Pinned,
+    /// The components `[x, y, z]` marked `true` of the edge row held (y and z on an edge in
+    /// the plane x = const: a rigid diaphragm).
+    Hold([bool; 3]),
+    /// A plane of symmetry through the edge, with normal `n` the direction from each edge point
+    /// to its neighbour in the next row (the surface crosses the plane at right angles): every
+    /// edge point stays on the plane (`n · p_a` held) and each next-row point moves with its
+    /// edge point across the plane (`t · (p_b − p_a)` held for the two directions `t ⊥ n`), so
+    /// the cross tangent stays normal to the plane. Exact for large deformations of a
+    /// symmetric motion.
+    Symmetry,
+}
+
+/// A condition on one edge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeConstraint {
+    /// The edge.
+    pub edge: crate::Edge,
+    /// The condition.
+    pub condition: EdgeCondition,
+}
+
+/// Flat indices of the control points of `edge` (ascending along it) and of the next row
+/// inwards, on an `n_u × n_v` net.
+pub fn edge_rows(n_u: usize, n_v: usize, edge: crate::Edge) -> (Vec<usize>, Vec<usize>) {
+    use crate::Edge;
+    let row_u = |i: usize| (0..n_v).map(|j| i * n_v + j).collect::<Vec<_>>();
+    let row_v = |j: usize| (0..n_u).map(|i| i * n_v + j).collect::<Vec<_>>();
+    match edge {
+        Edge::U0 => (row_u(0), row_u(1.min(n_u - 1))),
+        Edge::U1 => (row_u(n_u - 1), row_u(n_u.saturating_sub(2))),
+        Edge::V0 => (row_v(0), row_v(1.min(n_v - 1))),
+        Edge::V1 => (row_v(n_v - 1), row_v(n_v.saturating_sub(2))),
+    }
+}
+
 /// Which generalized coordinates are constrained (docs/math.md §4).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Constraints {
@@ -37,6 +81,8 @@ pub struct Constraints {
     pub fixed_point_weights: bool,
     /// General linear constraints `A p = b` on the full generalized coordinates.
     pub linear: Vec<LinearConstraint>,
+    /// Conditions along edges of a surface.
+    pub edges: Vec<EdgeConstraint>,
 }
 
 /// The null-space substitution of the linear constraints on the free dofs.
@@ -93,10 +139,23 @@ impl Reduction {
         for k in outer_ring_points(n_u, n_v, constraints.fixed_rings) {
             is_fixed_point[k] = true;
         }
+        let (held, edge_rows) = resolve_edges(geometry, &constraints.edges, m, p0)?;
+        for &k in &held.points {
+            is_fixed_point[k] = true;
+        }
         let fixed_points: Vec<usize> = (0..n).filter(|&k| is_fixed_point[k]).collect();
         let mut fixed: Vec<usize> = fixed_points
             .iter()
             .flat_map(|&k| (0..3).map(move |x| k * m + x))
+            .collect();
+        fixed.extend(held.dofs.iter().copied());
+        fixed.sort_unstable();
+        fixed.dedup();
+        let linear: Vec<LinearConstraint> = constraints
+            .linear
+            .iter()
+            .cloned()
+            .chain(edge_rows)
             .collect();
         for (r, c) in constraints.linear.iter().enumerate() {
             if !c.rhs.is_finite() {
@@ -151,8 +210,8 @@ impl Reduction {
         }
         let mut affine = None;
         let mut n_q = n_free;
-        if !constraints.linear.is_empty() {
-            let a = build_affine(&dof_map, &constraints.linear, p0)?;
+        if !linear.is_empty() {
+            let a = build_affine(&dof_map, &linear, p0)?;
             if let Some(a) = a {
                 for (i, &g) in a.particular.iter().enumerate() {
                     offset[dof_map.free()[i]] = g;
@@ -231,6 +290,104 @@ impl Reduction {
             Some(af) => Ok(af.basis_t.matmul(&aff.matmul(&af.basis)?)?),
         }
     }
+}
+
+/// What edge conditions hold outright: whole control points and single dofs.
+#[derive(Default)]
+struct Held {
+    points: Vec<usize>,
+    dofs: Vec<usize>,
+}
+
+/// Resolves edge conditions (docs/math.md §10.7) into held points and dofs and linear rows on
+/// the generalized coordinates (`m` per control point).
+fn resolve_edges(
+    geometry: &Geometry,
+    edges: &[EdgeConstraint],
+    m: usize,
+    p0: &[f64],
+) -> Result<(Held, Vec<LinearConstraint>), DnurbsError> {
+    let mut held = Held::default();
+    let mut rows = Vec::new();
+    if edges.is_empty() {
+        return Ok((held, rows));
+    }
+    if geometry.is_curve() {
+        return Err(DnurbsError::InvalidConstraint {
+            detail: "edge conditions need a surface; a curve has no edges".into(),
+        });
+    }
+    let (n_u, n_v) = geometry.net_shape();
+    let point = |k: usize| [p0[m * k], p0[m * k + 1], p0[m * k + 2]];
+    for (e, c) in edges.iter().enumerate() {
+        let (edge, next) = edge_rows(n_u, n_v, c.edge);
+        match c.condition {
+            EdgeCondition::Clamped => {
+                held.points.extend(&edge);
+                held.points.extend(&next);
+            }
+            EdgeCondition::Pinned => held.points.extend(&edge),
+            EdgeCondition::Hold(components) => {
+                for &k in &edge {
+                    for (x, _) in components.iter().enumerate().filter(|(_, on)| **on) {
+                        held.dofs.push(m * k + x);
+                    }
+                }
+            }
+            EdgeCondition::Symmetry => {
+                for (&a, &b) in edge.iter().zip(&next) {
+                    let (pa, pb) = (point(a), point(b));
+                    let d: [f64; 3] = std::array::from_fn(|x| pb[x] - pa[x]);
+                    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    if len.is_nan() || len <= 0.0 || a == b {
+                        return Err(DnurbsError::InvalidConstraint {
+                            detail: format!(
+                                "symmetry on edge {} (condition {e}): control point {b} of the \
+                                 next row coincides with edge point {a}, so the plane's normal \
+                                 is undefined",
+                                c.edge.name()
+                            ),
+                        });
+                    }
+                    let n = d.map(|x| x / len);
+                    // Two unit directions orthogonal to n.
+                    let helper = if n[0].abs() < 0.9 {
+                        [1.0, 0.0, 0.0]
+                    } else {
+                        [0.0, 1.0, 0.0]
+                    };
+                    let t1 = {
+                        let c = [
+                            n[1] * helper[2] - n[2] * helper[1],
+                            n[2] * helper[0] - n[0] * helper[2],
+                            n[0] * helper[1] - n[1] * helper[0],
+                        ];
+                        let l = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+                        c.map(|x| x / l)
+                    };
+                    let t2 = [
+                        n[1] * t1[2] - n[2] * t1[1],
+                        n[2] * t1[0] - n[0] * t1[2],
+                        n[0] * t1[1] - n[1] * t1[0],
+                    ];
+                    let dot = |u: [f64; 3], v: [f64; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+                    rows.push(LinearConstraint {
+                        terms: (0..3).map(|x| (m * a + x, n[x])).collect(),
+                        rhs: dot(n, pa),
+                    });
+                    for t in [t1, t2] {
+                        rows.push(LinearConstraint {
+                            terms: (0..3)
+                                .flat_map(|x| [(m * b + x, t[x]), (m * a + x, -t[x])])
+                                .collect(),
+                            rhs: dot(t, d),
+                        });
+                    }
+                }
+            }
+        }
+    }
+    Ok((held, rows))
 }
 
 /// Linear constraints on the free dofs: `A_f p_f = b − A_c p_c`, solved as `p_f = G q + g`

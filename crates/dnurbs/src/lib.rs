@@ -66,14 +66,14 @@ mod run;
 mod shell;
 
 pub use assembly::{Assembler, Matrices, ScalarMatrices, assemble, assemble_scalar};
-pub use constraints::{Constraints, LinearConstraint};
+pub use constraints::{Constraints, EdgeCondition, EdgeConstraint, LinearConstraint, edge_rows};
 pub use edge::{Edge, EdgeLoad};
 pub use elasticity::{ElasticEnergy, TensionPlate};
 pub use equilibrium::{Cancel, EquilibriumPath, LoadLevel, PathSettings};
 pub use error::DnurbsError;
 pub use geometry::{Geometry, outer_ring_points};
 pub use loads::{Loads, PointLoad};
-pub use material::Material;
+pub use material::{Material, MaterialModel};
 pub use model::{
     ANDERSON_DEPTH, DENSE_MODES_LIMIT, DnurbsModel, Modes, SteadySettings, SteadyState,
 };

@@ -119,3 +119,55 @@ impl Material {
         ]
     }
 }
+
+/// The energy of a D-NURBS (docs/math.md §3, §10): the paper's tension plate or the
+/// Kirchhoff–Love shell. In a scene file, `[material] model = "tension-plate"` (the default)
+/// or `"kirchhoff-love"`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[serde(tag = "model", rename_all = "kebab-case")]
+pub enum MaterialModel {
+    /// The paper's energy (α, β per unit parameter area), linear in the control points.
+    TensionPlate(Material),
+    /// The isogeometric Kirchhoff–Love shell (E, ν, t, ρ), geometrically nonlinear.
+    KirchhoffLove(crate::ShellMaterial),
+}
+
+impl Default for MaterialModel {
+    fn default() -> Self {
+        MaterialModel::TensionPlate(Material::default())
+    }
+}
+
+impl MaterialModel {
+    /// "tension-plate" or "kirchhoff-love", as in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            MaterialModel::TensionPlate(_) => "tension-plate",
+            MaterialModel::KirchhoffLove(_) => "kirchhoff-love",
+        }
+    }
+
+    /// The tension plate's coefficients, if the model is the tension plate.
+    pub fn tension_plate(&self) -> Option<&Material> {
+        match self {
+            MaterialModel::TensionPlate(m) => Some(m),
+            MaterialModel::KirchhoffLove(_) => None,
+        }
+    }
+
+    /// The shell material, if the model is the shell.
+    pub fn shell(&self) -> Option<&crate::ShellMaterial> {
+        match self {
+            MaterialModel::TensionPlate(_) => None,
+            MaterialModel::KirchhoffLove(m) => Some(m),
+        }
+    }
+
+    /// The mass-proportional damping γ.
+    pub fn gamma(&self) -> f64 {
+        match self {
+            MaterialModel::TensionPlate(m) => m.gamma,
+            MaterialModel::KirchhoffLove(m) => m.gamma,
+        }
+    }
+}

@@ -333,6 +333,33 @@ impl DnurbsModel {
         })
     }
 
+    /// The model of `material`: [`DnurbsModel::new`] for the tension plate,
+    /// [`DnurbsModel::kirchhoff_love`] for the shell.
+    pub fn build(
+        geometry: Geometry,
+        material: &crate::MaterialModel,
+        loads: Loads,
+        constraints: &Constraints,
+        options: DnurbsOptions,
+    ) -> Result<Self, DnurbsError> {
+        match material {
+            crate::MaterialModel::TensionPlate(m) => {
+                Self::new(geometry, m.clone(), loads, constraints, options)
+            }
+            crate::MaterialModel::KirchhoffLove(m) => {
+                Self::kirchhoff_love(geometry, *m, loads, constraints, options)
+            }
+        }
+    }
+
+    /// The material model: the tension plate's coefficients, or the shell's material.
+    pub fn material_model(&self) -> crate::MaterialModel {
+        match &self.shell {
+            Some(s) => crate::MaterialModel::KirchhoffLove(*s.material()),
+            None => crate::MaterialModel::TensionPlate(self.material.clone()),
+        }
+    }
+
     /// The shell's energy, when the model is a Kirchhoff–Love shell.
     pub fn shell(&self) -> Option<&ShellEnergy> {
         self.shell.as_deref()
@@ -528,7 +555,7 @@ impl DnurbsModel {
 
     /// Steady state (paper eq. (8), docs/math.md §3): the full `p` at rest, solving
     /// `K(p) (p − p_rest) = f_p(p)` on the free dofs (projected by `Gᵀ` with linear
-    /// constraints).
+    /// constraints); for the shell, `f_int(p) = f` by [`DnurbsModel::equilibrium_path`].
     ///
     /// With constant weights K and f are constant and this is one linear solve,
     /// [`DnurbsModel::linearized_steady_state`]. With weights as unknowns K and f depend on the
@@ -538,6 +565,9 @@ impl DnurbsModel {
     /// Returns [`DnurbsError::Singular`] when the reduced stiffness is singular, e.g. a
     /// free-floating body (nothing fixed: rigid translations cost no energy).
     pub fn steady_state(&self) -> Result<Vec<f64>, DnurbsError> {
+        if self.shell.is_some() {
+            return Ok(self.steady_state_with(SteadySettings::default())?.p);
+        }
         if self.options.weights_as_dofs {
             Ok(self.steady_state_with(SteadySettings::default())?.p)
         } else {
@@ -562,6 +592,25 @@ impl DnurbsModel {
     /// `settings.max_iterations` or a weight becomes non-positive. With constant weights the
     /// first iterate is exact (`iterations = 1`).
     pub fn steady_state_with(&self, settings: SteadySettings) -> Result<SteadyState, DnurbsError> {
+        if self.shell.is_some() {
+            // The shell: the equilibrium path to the full load (docs/math.md §10.5).
+            let path = self.equilibrium_path(
+                &crate::PathSettings {
+                    tolerance: settings
+                        .tolerance
+                        .max(crate::PathSettings::default().tolerance),
+                    ..crate::PathSettings::default()
+                },
+                &|| false,
+                &mut |_| {},
+            )?;
+            let last = path.levels.last().expect("the path ends at the full load");
+            return Ok(SteadyState {
+                p: last.p.clone(),
+                iterations: path.iterations,
+                residual: last.residual,
+            });
+        }
         let p1 = self.linearized_steady_state()?;
         let wad = self.options.weights_as_dofs;
         if !wad || self.reduction.n_q == 0 {

@@ -8,15 +8,28 @@ use nurbspring_sim::{
     DynamicModel, IntegratorKind, Observer, RunOptions, RunSummary, Sample, State, simulate,
 };
 
-use crate::{Assembler, DnurbsError, DnurbsModel, DnurbsOptions, Material, RationalStepper};
+use crate::{Assembler, DnurbsError, DnurbsModel, DnurbsOptions, MaterialModel, RationalStepper};
 
 /// Why `integrator` cannot run a D-NURBS with this material and these options; `None` when it
 /// can. The one place these rules live: [`DnurbsModel::simulate`] and the scene checks use it.
 pub fn integrator_problem(
     integrator: IntegratorKind,
-    material: &Material,
+    material: &MaterialModel,
     options: &DnurbsOptions,
 ) -> Option<String> {
+    let material = match material {
+        MaterialModel::TensionPlate(m) => m,
+        MaterialModel::KirchhoffLove(_) => {
+            return (!DnurbsModel::SHELL_INTEGRATORS.contains(&integrator)).then(|| {
+                format!(
+                    "the Kirchhoff–Love shell is nonlinear: {} (linear models only) cannot run it; \
+                     expected one of {}",
+                    integrator.name(),
+                    names(&DnurbsModel::SHELL_INTEGRATORS)
+                )
+            });
+        }
+    };
     if !DnurbsModel::INTEGRATORS.contains(&integrator) {
         return Some(format!(
             "not an integrator of the D-NURBS model; expected one of {}",
@@ -58,6 +71,11 @@ pub fn names(kinds: &[IntegratorKind]) -> String {
 }
 
 impl DnurbsModel {
+    /// The integrators a Kirchhoff–Love shell runs with: implicit with Newton on the
+    /// consistent tangent at every step.
+    pub const SHELL_INTEGRATORS: [IntegratorKind; 2] =
+        [IntegratorKind::Newmark, IntegratorKind::BackwardEuler];
+
     /// The integrators a D-NURBS runs with.
     pub const INTEGRATORS: [IntegratorKind; 3] = [
         IntegratorKind::TerzopoulosQin,
@@ -82,7 +100,9 @@ impl DnurbsModel {
         opts: &RunOptions,
         observer: &mut dyn Observer,
     ) -> Result<RunSummary, DnurbsError> {
-        if let Some(reason) = integrator_problem(opts.integrator, &self.material, &self.options) {
+        if let Some(reason) =
+            integrator_problem(opts.integrator, &self.material_model(), &self.options)
+        {
             return Err(DnurbsError::InvalidOption {
                 name: "integrator",
                 value: opts.integrator.name().to_string(),

@@ -3,7 +3,10 @@
 //! [`Error::Model`] naming the file and, where one caused it, the key.
 
 use nurbspring_derive::{Config, FitOptions, InitialConditions, MassChoice, Method, TimeSettings};
-use nurbspring_dnurbs::{Constraints, DnurbsModel, Geometry, LinearConstraint, Loads, PointLoad};
+use nurbspring_dnurbs::{
+    Constraints, DnurbsModel, EdgeCondition, EdgeConstraint, EdgeLoad, Geometry, LinearConstraint,
+    Loads, Material, PointLoad,
+};
 use nurbspring_msm::{
     Class, Constants, FixedNodes, LatticeOptions, LinearKind, MsmError, ParameterGrid, SpringKind,
 };
@@ -122,6 +125,25 @@ impl Scene {
         Error::model(&self.path, key, e)
     }
 
+    /// The tension plate's coefficients, or the error for a Kirchhoff–Love scene where `what`
+    /// needs the tension plate.
+    pub(crate) fn tension_plate(&self, what: &str) -> Result<&Material, Error> {
+        self.material.tension_plate().ok_or_else(|| {
+            self.model_error(
+                Some("material.model"),
+                nurbspring_derive::DeriveError::InvalidOption {
+                    name: "material",
+                    value: "\"kirchhoff-love\"".to_string(),
+                    reason: format!(
+                        "{what} works on tension-plate scenes (the paper's energy); the \
+                         Kirchhoff–Love shell runs with check, steady, modes, matrices, simulate \
+                         --model dnurbs, eval, export and refine"
+                    ),
+                },
+            )
+        })
+    }
+
     /// The error for a `[curve]` scene where `what` needs a surface.
     pub(crate) fn needs_surface(&self, what: &str) -> Error {
         self.model_error(
@@ -157,7 +179,15 @@ impl Scene {
                     force: p.force,
                 })
                 .collect(),
-            edges: Vec::new(),
+            edges: l
+                .edge
+                .iter()
+                .map(|e| EdgeLoad {
+                    edge: e.edge,
+                    force: e.force,
+                    moment: e.moment,
+                })
+                .collect(),
         }
     }
 
@@ -198,14 +228,29 @@ impl Scene {
                     rhs: row.rhs,
                 })
                 .collect(),
+            edges: c
+                .edge
+                .iter()
+                .map(|e| EdgeConstraint {
+                    edge: e.edge,
+                    condition: match e.condition {
+                        Some(EdgeConditionName::Clamped) => EdgeCondition::Clamped,
+                        Some(EdgeConditionName::Pinned) => EdgeCondition::Pinned,
+                        Some(EdgeConditionName::Symmetry) => EdgeCondition::Symmetry,
+                        None => EdgeCondition::Hold(std::array::from_fn(|x| {
+                            e.hold.iter().any(|c| c.offset() == x)
+                        })),
+                    },
+                })
+                .collect(),
         }
     }
 
     /// The constrained D-NURBS model.
     pub fn build_dnurbs(&self) -> Result<DnurbsModel, Error> {
-        DnurbsModel::new(
+        DnurbsModel::build(
             self.build_geometry()?,
-            self.material.clone(),
+            &self.material,
             self.build_loads(),
             &self.build_constraints(),
             self.dnurbs.clone(),
@@ -294,12 +339,13 @@ impl Scene {
     /// parameters, evaluated beside the derived ones.
     pub fn derivation_config(&self, method: Option<Method>) -> Result<Config, Error> {
         let method = method.unwrap_or(self.derivation().0);
+        let material = self.tension_plate("a derivation")?.clone();
         let geometry = self.build_geometry()?;
         let fit = &self.fit;
         Ok(Config {
             method,
             geometry,
-            material: self.material.clone(),
+            material,
             loads: self.build_loads(),
             constraints: self.build_constraints(),
             dnurbs: self.dnurbs.clone(),

@@ -520,6 +520,19 @@ pub fn write_steady(
     p: &[f64],
 ) -> Result<(), Error> {
     let dpp = model.matrices().dofs_per_point;
+    // The control points are finite by construction of the solve; a non-finite value would
+    // be an internal failure, not a file to write.
+    if p.iter().any(|x| !x.is_finite()) {
+        return Err(Error::model(
+            Path::new("steady"),
+            None,
+            nurbspring_dnurbs::DnurbsError::NonFinite {
+                what: "steady state",
+                step: 0,
+                time: 0.0,
+            },
+        ));
+    }
     write_geometry_frame(&out.join("steady.vts"), model.geometry(), p, dpp)?;
     let rows = (0..model.geometry().n_control_points()).map(|k| p[dpp * k..dpp * k + dpp].to_vec());
     let header: &[&str] = if dpp == 4 {
@@ -528,6 +541,29 @@ pub fn write_steady(
         &["x", "y", "z"]
     };
     write_csv(out.join("steady.csv"), header, rows)?;
+    Ok(())
+}
+
+/// `load_path.csv`: the load factor λ and each probe's displacement at every recorded level of
+/// a steady state's path, columns `lambda, probe<k>_dx[u=…;v=…], …_dy, …_dz`.
+pub fn write_load_path(out: &Path, steady: &crate::run::Steady) -> Result<(), Error> {
+    let mut header = vec!["lambda".to_string()];
+    for (k, probe) in steady.probes.iter().enumerate() {
+        for c in ["dx", "dy", "dz"] {
+            header.push(format!(
+                "probe{k}_{c}[u={};v={}]",
+                nurbspring_io::output::format_f64(probe.u),
+                nurbspring_io::output::format_f64(probe.v)
+            ));
+        }
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    let rows = steady.path.iter().map(|level| {
+        std::iter::once(level.lambda)
+            .chain(level.displacements.iter().flat_map(|d| d.iter().copied()))
+            .collect::<Vec<f64>>()
+    });
+    write_csv(out.join("load_path.csv"), &header, rows)?;
     Ok(())
 }
 

@@ -51,11 +51,23 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
     (
         "material",
         &[
-            "mu", "gamma", "alpha11", "alpha22", "beta11", "beta12", "beta22",
+            "model",
+            "mu",
+            "gamma",
+            "alpha11",
+            "alpha22",
+            "beta11",
+            "beta12",
+            "beta22",
+            "young",
+            "poisson",
+            "thickness",
+            "density",
         ],
     ),
-    ("loads", &["gravity", "distributed", "point"]),
+    ("loads", &["gravity", "distributed", "point", "edge"]),
     ("loads.point", &["u", "v", "force"]),
+    ("loads.edge", &["edge", "force", "moment"]),
     (
         "constraints",
         &[
@@ -64,8 +76,10 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
             "fixed_weights",
             "fixed_point_weights",
             "linear",
+            "edge",
         ],
     ),
+    ("constraints.edge", &["edge", "condition", "hold"]),
     ("constraints.linear", &["terms", "rhs"]),
     (
         "constraints.linear.terms",

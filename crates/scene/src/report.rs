@@ -9,7 +9,7 @@ use nurbspring_derive::{
     Derivation, FitDetail, FrequencyRow, InitialConditions, MassReport, Method, NodeReduction,
     ParameterSet, Spectrum, TimeSettings, Trajectory, Validation,
 };
-use nurbspring_dnurbs::{DnurbsOptions, Loads, Material};
+use nurbspring_dnurbs::{DnurbsOptions, Loads, MaterialModel};
 use nurbspring_io::output::{write_csv, write_json};
 use nurbspring_io::plot::{PlotOptions, Series, plot_series_with, plot_spectrum};
 use nurbspring_msm::{Class, Constants, FileSimulation, MsmFile, SpringKind};
@@ -26,7 +26,7 @@ use crate::{Error, Scene};
 #[derive(Serialize)]
 pub struct Inputs<'a> {
     /// `[material]`.
-    pub material: &'a Material,
+    pub material: &'a MaterialModel,
     /// `[loads]`.
     pub loads: Loads,
     /// `[constraints]`.

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use nurbspring_derive::{DeriveError, Omega, Recording, Trajectory, Watched, record};
 use nurbspring_dnurbs::DnurbsModel;
@@ -488,6 +488,16 @@ pub struct SteadyProbe {
     pub displacement: [f64; 3],
 }
 
+/// One recorded load level of [`steady_state`]'s path: the load factor and the probes'
+/// displacements (in the order of [`Steady::probes`]).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct LoadLevelProbes {
+    /// The load factor λ (1: the scene's loads).
+    pub lambda: f64,
+    /// `c(p(λ)) − c(p(0))` at each probe.
+    pub displacements: Vec<[f64; 3]>,
+}
+
 /// The scene's D-NURBS at rest (paper eq. (8), docs/math.md §3).
 #[derive(Clone, Debug)]
 pub struct Steady {
@@ -497,22 +507,155 @@ pub struct Steady {
     pub p: Vec<f64>,
     /// Warnings about the model (e.g. the quadrature's estimated error).
     pub warnings: Vec<String>,
-    /// Iterates of the nonlinear solve (1: one linear solve, constant weights).
+    /// Newton iterations, or iterates of the weights' fixed-point iteration (1: one linear
+    /// solve).
     pub iterations: usize,
-    /// Relative residual of `K(p)(p − p_rest) = f_p(p)` at `p` (0 for constant weights).
+    /// Relative residual of the equilibrium at `p` (0 for one linear solve).
     pub residual: f64,
+    /// Load increments of the equilibrium path (1 for one solve).
+    pub increments: usize,
+    /// Which equations were solved.
+    pub equations: &'static str,
     /// The probes, the centre of the parameter domain first.
     pub probes: Vec<SteadyProbe>,
+    /// The recorded load levels (`load_steps` of them; the last is λ = 1).
+    pub path: Vec<LoadLevelProbes>,
 }
 
-/// Solves the steady state of the scene's D-NURBS: one linear solve with constant weights, the
-/// nonlinear equilibrium `K(p)(p − p_rest) = f_p(p)` with weights as unknowns
-/// ([`DnurbsModel::steady_state_with`]); probe points are the surface evaluated at that state.
-pub fn steady_state(scene: &Scene) -> Result<Steady, Error> {
+/// How [`steady_state`] solves: load levels recorded, and for the shell whether to solve the
+/// linearization at rest instead of the nonlinear equilibrium.
+#[derive(Clone, Debug)]
+pub struct SteadyRequest {
+    /// Equal load levels recorded along the path (≥ 1; more than 1 with weights as unknowns is
+    /// refused).
+    pub load_steps: usize,
+    /// Solve `K_T(p(0)) Δp = f` (the shell's tangent at rest) instead of the nonlinear
+    /// equilibrium.
+    pub linear: bool,
+    /// Set to stop between Newton iterations (Ctrl-C).
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl Default for SteadyRequest {
+    fn default() -> Self {
+        Self {
+            load_steps: 1,
+            linear: false,
+            cancel: None,
+        }
+    }
+}
+
+/// Solves the steady state of the scene's D-NURBS (docs/math.md §3, §10.5): one linear solve
+/// for the tension plate with constant weights, the nonlinear equilibrium
+/// `K(p)(p − p_rest) = f_p(p)` with weights as unknowns
+/// ([`DnurbsModel::steady_state_with`]), the shell's equilibrium path `f_int(p) = λ f` by
+/// Newton with load increments ([`DnurbsModel::equilibrium_path`]; its linearization at rest
+/// with `request.linear`). `progress(λ)` follows the path. Probe points are the surface
+/// evaluated at each recorded level.
+pub fn steady_state(
+    scene: &Scene,
+    request: &SteadyRequest,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Steady, Error> {
+    if request.load_steps == 0 {
+        return Err(Error::Option {
+            name: "--load-steps".into(),
+            value: "0".into(),
+            message: "at least one load level".into(),
+        });
+    }
     let model = scene.build_dnurbs()?;
-    let solved = model
-        .steady_state_with(nurbspring_dnurbs::SteadySettings::default())
-        .map_err(|e| Error::model(&scene.path, None, e))?;
+    let shell = model.shell().is_some();
+    if request.linear && !shell {
+        return Err(Error::Option {
+            name: "--linear".into(),
+            value: "true".into(),
+            message: format!(
+                "applies to Kirchhoff–Love scenes; {} with material.model = \"{}\" is already {}",
+                scene.path.display(),
+                scene.material.name(),
+                if scene.dnurbs.weights_as_dofs {
+                    "solved by its own nonlinear iteration"
+                } else {
+                    "linear"
+                }
+            ),
+        });
+    }
+    if scene.dnurbs.weights_as_dofs && request.load_steps > 1 {
+        return Err(Error::Option {
+            name: "--load-steps".into(),
+            value: request.load_steps.to_string(),
+            message: "with weights as unknowns (dnurbs.weights_as_dofs = true) the steady state \
+                     is one fixed-point iteration at the full load; leave --load-steps out"
+                .into(),
+        });
+    }
+    let model_error = |e| Error::model(&scene.path, None, e);
+    let (levels, iterations, residual, increments, equations): (Vec<(f64, Vec<f64>)>, _, _, _, _) =
+        if scene.dnurbs.weights_as_dofs {
+            let solved = model
+                .steady_state_with(nurbspring_dnurbs::SteadySettings::default())
+                .map_err(model_error)?;
+            (
+                vec![(1.0, solved.p)],
+                solved.iterations,
+                solved.residual,
+                1,
+                "nonlinear: K(p)(p - p_rest) = f(p), M, K, f at the solution",
+            )
+        } else if request.linear {
+            let p = model.linearized_steady_state().map_err(model_error)?;
+            let n = request.load_steps;
+            let p0 = model.p0();
+            let levels = (1..=n)
+                .map(|l| {
+                    let lambda = l as f64 / n as f64;
+                    let p: Vec<f64> = p
+                        .iter()
+                        .zip(p0)
+                        .map(|(a, b)| b + lambda * (a - b))
+                        .collect();
+                    (lambda, p)
+                })
+                .collect();
+            (
+                levels,
+                1,
+                0.0,
+                1,
+                "linear: K_T(p0) (p - p0) = f (the tangent at rest)",
+            )
+        } else {
+            let cancel = request.cancel.clone();
+            let stop = move || cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed));
+            let path = model
+                .equilibrium_path(
+                    &nurbspring_dnurbs::PathSettings {
+                        levels: request.load_steps,
+                        ..Default::default()
+                    },
+                    &stop,
+                    progress,
+                )
+                .map_err(|e| match e {
+                    nurbspring_dnurbs::DnurbsError::Cancelled => Error::Cancelled,
+                    e => model_error(e),
+                })?;
+            let residual = path.levels.last().map_or(0.0, |l| l.residual);
+            (
+                path.levels.into_iter().map(|l| (l.lambda, l.p)).collect(),
+                path.iterations,
+                residual,
+                path.increments,
+                if shell {
+                    "nonlinear: f_int(p) = f (Kirchhoff-Love shell, Newton with load increments)"
+                } else {
+                    "linear: K (p - p_rest) = f"
+                },
+            )
+        };
     let params = scene.probe_params()?;
     let omega = Omega::new(model.geometry(), &params, scene.dnurbs.weights_as_dofs)
         .map_err(|e| Error::model(&scene.path, Some("simulation.probes"), e))?;
@@ -521,23 +664,41 @@ pub fn steady_state(scene: &Scene) -> Result<Steady, Error> {
             .positions(p)
             .map_err(|e| Error::model(&scene.path, None, e))
     };
-    let (now, before) = (points(&solved.p)?, points(model.p0())?);
+    let before = points(model.p0())?;
+    let displacements = |now: &[[f64; 3]]| -> Vec<[f64; 3]> {
+        now.iter()
+            .zip(&before)
+            .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+            .collect()
+    };
+    let mut path = Vec::with_capacity(levels.len());
+    for (lambda, p) in &levels {
+        path.push(LoadLevelProbes {
+            lambda: *lambda,
+            displacements: displacements(&points(p)?),
+        });
+    }
+    let p = levels.last().expect("at least one level").1.clone();
+    let now = points(&p)?;
     let probes = params
         .iter()
-        .zip(now.iter().zip(&before))
-        .map(|(&(u, v), (at, b))| SteadyProbe {
+        .zip(now.iter().zip(displacements(&now)))
+        .map(|(&(u, v), (at, d))| SteadyProbe {
             u,
             v,
             point: *at,
-            displacement: [at[0] - b[0], at[1] - b[1], at[2] - b[2]],
+            displacement: d,
         })
         .collect();
     Ok(Steady {
         warnings: model.quadrature().warning().into_iter().collect(),
         model,
-        p: solved.p,
-        iterations: solved.iterations,
-        residual: solved.residual,
+        p,
+        iterations,
+        residual,
+        increments,
+        equations,
         probes,
+        path,
     })
 }

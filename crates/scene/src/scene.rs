@@ -31,7 +31,7 @@
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use nurbspring_dnurbs::{DnurbsOptions, Material};
+use nurbspring_dnurbs::{DnurbsOptions, MaterialModel};
 use serde::Serialize;
 
 use crate::spec::*;
@@ -50,7 +50,7 @@ struct OutScene<'a> {
     surface: Option<&'a SurfaceSpec>,
     #[serde(skip_serializing_if = "Option::is_none")]
     curve: Option<&'a CurveSpec>,
-    material: &'a Material,
+    material: &'a MaterialModel,
     loads: &'a LoadsSpec,
     constraints: &'a ConstraintsSpec,
     dnurbs: &'a DnurbsOptions,
@@ -96,7 +96,8 @@ impl Scene {
     pub fn from_str(text: &str, path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         let raw: RawScene = toml::from_str(text).map_err(|e| parse::parse_error(path, text, &e))?;
-        validate::build_scene(raw, path).map_err(|e| e.with_path(path))
+        validate::build_scene(raw, path, validate::GivenKeys::of(text))
+            .map_err(|e| e.with_path(path))
     }
 
     /// The scene as TOML text that [`Scene::from_str`] reads back to an equal scene (numbers

@@ -1,13 +1,13 @@
 //! The sections of a scene file as Rust types. Every table is `deny_unknown_fields`, every
 //! section has a `Default` (the values documented in `docs/scenes.md`). Where a model type
-//! is the table key for key it is used directly: `[material]` is `nurbspring_dnurbs::Material`,
-//! `[dnurbs]` is `nurbspring_dnurbs::DnurbsOptions`, integrators are
+//! is the table key for key it is used directly (`[material]` is read as [`RawMaterial`] and
+//! validated into `nurbspring_dnurbs::MaterialModel`), `[dnurbs]` is `nurbspring_dnurbs::DnurbsOptions`, integrators are
 //! `nurbspring_sim::IntegratorKind`.
 
 use std::path::PathBuf;
 
 use nurbspring_derive::{FitDofs, FitMethod, Method};
-use nurbspring_dnurbs::{DnurbsOptions, Material};
+use nurbspring_dnurbs::{DnurbsOptions, Edge, MaterialModel};
 use nurbspring_msm::LinearKind;
 use nurbspring_sim::IntegratorKind;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
@@ -130,6 +130,44 @@ pub struct LoadsSpec {
     /// Point loads (`[[loads.point]]`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub point: Vec<PointLoadSpec>,
+    /// Edge loads (`[[loads.edge]]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub edge: Vec<EdgeLoadSpec>,
+}
+
+/// `[material]` as written: the keys of both models, each optional, so that every rule can
+/// name its key (the model's own rules come from `Material::problems` and
+/// `ShellMaterial::problems`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawMaterial {
+    pub(crate) model: Option<String>,
+    pub(crate) mu: Option<f64>,
+    pub(crate) gamma: Option<f64>,
+    pub(crate) alpha11: Option<f64>,
+    pub(crate) alpha22: Option<f64>,
+    pub(crate) beta11: Option<f64>,
+    pub(crate) beta12: Option<f64>,
+    pub(crate) beta22: Option<f64>,
+    pub(crate) young: Option<f64>,
+    pub(crate) poisson: Option<f64>,
+    pub(crate) thickness: Option<f64>,
+    pub(crate) density: Option<f64>,
+}
+
+/// One `[[loads.edge]]`: a force and a moment per unit length on a boundary edge of a surface
+/// (docs/math.md §10.6).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeLoadSpec {
+    /// `"u0"`, `"u1"`, `"v0"` or `"v1"`.
+    pub edge: Edge,
+    /// Force per unit length of the rest edge.
+    #[serde(default)]
+    pub force: [f64; 3],
+    /// Moment per unit length about the edge's rest tangent (the shell only).
+    #[serde(default)]
+    pub moment: f64,
 }
 
 /// One `[[loads.point]]`: a force applied at a parameter point.
@@ -161,6 +199,36 @@ pub struct ConstraintsSpec {
     /// General constraints `A p = b`, one row each (`[[constraints.linear]]`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub linear: Vec<LinearConstraintSpec>,
+    /// Conditions along surface edges (`[[constraints.edge]]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub edge: Vec<EdgeConstraintSpec>,
+}
+
+/// One `[[constraints.edge]]`: a boundary condition along an edge of the control net, given
+/// by `condition` or by the components to `hold` (docs/math.md §10.7).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeConstraintSpec {
+    /// `"u0"`, `"u1"`, `"v0"` or `"v1"`.
+    pub edge: Edge,
+    /// `"clamped"`, `"pinned"` or `"symmetry"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub condition: Option<EdgeConditionName>,
+    /// Components of the edge's control points to hold, e.g. `["y", "z"]` (a rigid diaphragm).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub hold: Vec<Component>,
+}
+
+/// The named edge conditions of `[[constraints.edge]]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EdgeConditionName {
+    /// The edge row and the next row held (zero displacement and slope).
+    Clamped,
+    /// The edge row held (zero displacement, free rotation about the edge).
+    Pinned,
+    /// A plane of symmetry through the edge.
+    Symmetry,
 }
 
 impl Default for ConstraintsSpec {
@@ -171,6 +239,7 @@ impl Default for ConstraintsSpec {
             fixed_weights: true,
             fixed_point_weights: FixedPointWeights::Free,
             linear: Vec::new(),
+            edge: Vec::new(),
         }
     }
 }
@@ -529,8 +598,8 @@ pub struct Scene {
     pub path: PathBuf,
     /// `[surface]` or `[curve]`.
     pub geometry: GeometrySpec,
-    /// `[material]`.
-    pub material: Material,
+    /// `[material]`: the tension plate (the default) or the Kirchhoff–Love shell.
+    pub material: MaterialModel,
     /// `[loads]`.
     pub loads: LoadsSpec,
     /// `[constraints]`.
@@ -556,7 +625,7 @@ pub(crate) struct RawScene {
     pub(crate) surface: Option<RawGeometry<RawSurface>>,
     pub(crate) curve: Option<RawGeometry<RawCurve>>,
     #[serde(default)]
-    pub(crate) material: Material,
+    pub(crate) material: RawMaterial,
     #[serde(default)]
     pub(crate) loads: LoadsSpec,
     #[serde(default)]

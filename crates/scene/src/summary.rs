@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use nurbspring_dnurbs::{DnurbsModel, Geometry, QuadratureChoice};
+use nurbspring_dnurbs::{DnurbsModel, Geometry, Material, QuadratureChoice};
 use nurbspring_sim::{IntegratorKind, Schedule};
 use serde::Serialize;
 
@@ -207,7 +207,15 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
 /// rigidly, and a time step above the explicit limit of the scene's MSM integrator.
 pub fn scene_warnings(scene: &Scene, model: &DnurbsModel, msm: Option<&MsmSummary>) -> Vec<String> {
     let mut warnings = Vec::new();
-    let m = &scene.material;
+    if let Some(m) = scene.material.tension_plate() {
+        zero_stiffness_warning(m, model, &mut warnings);
+    }
+    rigid_and_stability_warnings(scene, model, msm, &mut warnings);
+    warnings
+}
+
+/// The tension plate without stiffness: a warning.
+fn zero_stiffness_warning(m: &Material, model: &DnurbsModel, warnings: &mut Vec<String>) {
     let names: &[(&str, f64)] = match model.geometry() {
         Geometry::Surface(_) => &[
             ("alpha11", m.alpha11),
@@ -226,6 +234,15 @@ pub fn scene_warnings(scene: &Scene, model: &DnurbsModel, msm: Option<&MsmSummar
             list.join(", ")
         ));
     }
+}
+
+/// A body free to move rigidly, a time step above the MSM's explicit limit: warnings.
+fn rigid_and_stability_warnings(
+    scene: &Scene,
+    model: &DnurbsModel,
+    msm: Option<&MsmSummary>,
+    warnings: &mut Vec<String>,
+) {
     if model.fixed_points().is_empty() && scene.constraints.linear.is_empty() {
         warnings.push(
             "constraints: no fixed control points and no linear constraints: the body is free \
@@ -252,7 +269,6 @@ pub fn scene_warnings(scene: &Scene, model: &DnurbsModel, msm: Option<&MsmSummar
             time.dt, time.msm_integrator, msm.dt_critical,
         ));
     }
-    warnings
 }
 
 /// `weight of control point [i, j] (dof d) held at w = …` for the gauge weight, if any.

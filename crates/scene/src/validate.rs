@@ -5,7 +5,10 @@ use nurbspring_sim::representable;
 use std::path::Path;
 
 use nurbspring_derive::Method;
-use nurbspring_dnurbs::{DnurbsError, DnurbsOptions, Geometry, Material};
+use nurbspring_dnurbs::{
+    DnurbsError, DnurbsOptions, Geometry, Integration, Material, MaterialModel, RestShape,
+    ShellMaterial,
+};
 use nurbspring_geom::{GeomError, KnotVector, NurbsCurve, NurbsSurface};
 use nurbspring_io::output::format_f64;
 use nurbspring_msm::{LinearKind, MsmError, MsmModel};
@@ -93,8 +96,43 @@ struct GeomInfo {
     domain_v: (f64, f64),
 }
 
+/// Keys whose presence matters beyond their value: a key left out takes a default that
+/// depends on other keys.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct GivenKeys {
+    /// `simulation.dnurbs_integrator` (default: Terzopoulos–Qin for the tension plate, Newmark
+    /// for the shell).
+    pub(crate) dnurbs_integrator: bool,
+    /// `dnurbs.integrate_over` (the shell refuses it: it is always integrated over the area).
+    pub(crate) integrate_over: bool,
+}
+
+impl GivenKeys {
+    /// The keys present in the scene text (`None` when it is not a TOML table; the parse
+    /// error is reported elsewhere).
+    pub(crate) fn of(text: &str) -> Self {
+        let Ok(table) = text.parse::<toml::Table>() else {
+            return Self::default();
+        };
+        let has = |section: &str, key: &str| {
+            table
+                .get(section)
+                .and_then(|v| v.as_table())
+                .is_some_and(|t| t.contains_key(key))
+        };
+        Self {
+            dnurbs_integrator: has("simulation", "dnurbs_integrator"),
+            integrate_over: has("dnurbs", "integrate_over"),
+        }
+    }
+}
+
 /// Validates everything and builds the scene.
-pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneError> {
+pub(crate) fn build_scene(
+    raw: RawScene,
+    path: &Path,
+    given: GivenKeys,
+) -> Result<Scene, SceneError> {
     let mut p = Problems::default();
     let section = if raw.surface.is_some() {
         "surface"
@@ -149,19 +187,25 @@ pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneErro
             }
         }
     };
-    check_material(&raw.material, info.as_ref(), &mut p);
-    check_loads(&raw.loads, info.as_ref(), &mut p);
+    let material = check_material(&raw.material, info.as_ref(), &mut p);
+    check_loads(&raw.loads, &material, &raw.dnurbs, info.as_ref(), &mut p);
     check_constraints(&raw.constraints, &raw.dnurbs, info.as_ref(), &mut p);
     check_dnurbs(&raw.dnurbs, &mut p);
-    let initial = initial_spec(raw.initial, &raw.dnurbs, info.as_ref(), &mut p);
-    check_simulation(
-        &raw.simulation,
-        &raw.material,
-        &raw.dnurbs,
-        info.as_ref(),
-        &mut p,
-    );
-    let method = raw.fit.derivation_for(&raw.dnurbs, &raw.constraints).0;
+    if material.shell().is_some() {
+        check_shell_options(&raw.dnurbs, given, &mut p);
+    }
+    let mut simulation = raw.simulation;
+    let mut dnurbs = raw.dnurbs;
+    if material.shell().is_some() {
+        // The shell's defaults: implicit Newmark, the area measure.
+        if !given.dnurbs_integrator {
+            simulation.dnurbs_integrator = nurbspring_sim::IntegratorKind::Newmark;
+        }
+        dnurbs.integration = Integration::Area;
+    }
+    let initial = initial_spec(raw.initial, &dnurbs, info.as_ref(), &mut p);
+    check_simulation(&simulation, &material, &dnurbs, info.as_ref(), &mut p);
+    let method = raw.fit.derivation_for(&dnurbs, &raw.constraints).0;
     check_msm(&raw.msm, &raw.loads, method, info.as_ref(), &mut p);
     if raw.output.vtk_every == Some(0) {
         p.push("output.vtk_every", "0", "must be at least 1");
@@ -170,12 +214,12 @@ pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneErro
         (Some(geometry), 0) => Ok(Scene {
             path: path.to_path_buf(),
             geometry,
-            material: raw.material,
+            material,
             loads: raw.loads,
             constraints: raw.constraints,
-            dnurbs: raw.dnurbs,
+            dnurbs,
             initial: initial.unwrap_or_default(),
-            simulation: raw.simulation,
+            simulation,
             msm: raw.msm,
             fit: raw.fit,
             output: raw.output,
@@ -546,13 +590,170 @@ fn curve_info(c: &CurveSpec, p: &mut Problems) -> Option<GeomInfo> {
     }
 }
 
-/// The rules of `Material::problems`, with their key paths.
-fn check_material(m: &Material, info: Option<&GeomInfo>, p: &mut Problems) {
+/// The keys of the tension plate only (`gamma` is shared).
+const PLATE_KEYS: [&str; 6] = ["mu", "alpha11", "alpha22", "beta11", "beta12", "beta22"];
+/// The keys of the shell only.
+const SHELL_KEYS: [&str; 4] = ["young", "poisson", "thickness", "density"];
+
+impl RawMaterial {
+    fn plate_values(&self) -> [(&'static str, Option<f64>); 6] {
+        [
+            ("mu", self.mu),
+            ("alpha11", self.alpha11),
+            ("alpha22", self.alpha22),
+            ("beta11", self.beta11),
+            ("beta12", self.beta12),
+            ("beta22", self.beta22),
+        ]
+    }
+
+    fn shell_values(&self) -> [(&'static str, Option<f64>); 4] {
+        [
+            ("young", self.young),
+            ("poisson", self.poisson),
+            ("thickness", self.thickness),
+            ("density", self.density),
+        ]
+    }
+}
+
+/// `[material]`: the model named by `model` (the tension plate by default), the keys of the
+/// other model refused by name, the rules of `Material::problems` or
+/// `ShellMaterial::problems` with their key paths. An invalid table gives the default
+/// material beside its problems.
+fn check_material(m: &RawMaterial, info: Option<&GeomInfo>, p: &mut Problems) -> MaterialModel {
     let curve = info.is_some_and(|g| !g.surface);
-    for e in m.problems(curve) {
-        if let DnurbsError::InvalidMaterial { name, value, rule } = e {
-            p.push(format!("material.{name}"), format_f64(value), rule);
+    let push_rules = |errors: Vec<DnurbsError>, p: &mut Problems| {
+        for e in errors {
+            if let DnurbsError::InvalidMaterial { name, value, rule } = e {
+                p.push(format!("material.{name}"), format_f64(value), rule);
+            }
         }
+    };
+    match m.model.as_deref() {
+        None | Some("tension-plate") => {
+            for (key, value) in m.shell_values() {
+                if let Some(v) = value {
+                    p.push(
+                        format!("material.{key}"),
+                        format_f64(v),
+                        format!(
+                            "a key of model = \"kirchhoff-love\"; the tension plate (model = \
+                             \"tension-plate\", the default) is given by mu, gamma and alpha/beta \
+                             ({}); add model = \"kirchhoff-love\" for a shell",
+                            PLATE_KEYS.join(", ")
+                        ),
+                    );
+                }
+            }
+            let d = Material::default();
+            let material = Material {
+                mu: m.mu.unwrap_or(d.mu),
+                gamma: m.gamma.unwrap_or(d.gamma),
+                alpha11: m.alpha11.unwrap_or(d.alpha11),
+                alpha22: m.alpha22.unwrap_or(d.alpha22),
+                beta11: m.beta11.unwrap_or(d.beta11),
+                beta12: m.beta12.unwrap_or(d.beta12),
+                beta22: m.beta22.unwrap_or(d.beta22),
+            };
+            push_rules(material.problems(curve), p);
+            MaterialModel::TensionPlate(material)
+        }
+        Some("kirchhoff-love") => {
+            for (key, value) in m.plate_values() {
+                if let Some(v) = value {
+                    p.push(
+                        format!("material.{key}"),
+                        format_f64(v),
+                        format!(
+                            "the Kirchhoff–Love shell is given by {} (and gamma); mu, alpha and \
+                             beta belong to model = \"tension-plate\"",
+                            SHELL_KEYS.join(", ")
+                        ),
+                    );
+                }
+            }
+            for (key, value) in m.shell_values() {
+                if value.is_none() {
+                    p.push(
+                        format!("material.{key}"),
+                        "",
+                        format!(
+                            "missing: model = \"kirchhoff-love\" needs {}",
+                            SHELL_KEYS.join(", ")
+                        ),
+                    );
+                }
+            }
+            if curve {
+                p.push(
+                    "material.model",
+                    "\"kirchhoff-love\"",
+                    "the Kirchhoff–Love shell needs a [surface]; a curve is a tension plate \
+                     (string) only",
+                );
+            }
+            let shell = ShellMaterial {
+                young: m.young.unwrap_or(1.0),
+                poisson: m.poisson.unwrap_or(0.0),
+                thickness: m.thickness.unwrap_or(1.0),
+                density: m.density.unwrap_or(1.0),
+                gamma: m.gamma.unwrap_or(0.0),
+            };
+            let given: Vec<&str> = m
+                .shell_values()
+                .iter()
+                .filter(|(_, v)| v.is_some())
+                .map(|(k, _)| *k)
+                .chain(m.gamma.map(|_| "gamma"))
+                .collect();
+            let rules: Vec<DnurbsError> = shell
+                .problems()
+                .into_iter()
+                .filter(|e| match e {
+                    DnurbsError::InvalidMaterial { name, .. } => given.contains(name),
+                    _ => true,
+                })
+                .collect();
+            push_rules(rules, p);
+            MaterialModel::KirchhoffLove(shell)
+        }
+        Some(other) => {
+            p.push(
+                "material.model",
+                format!("\"{other}\""),
+                "expected \"tension-plate\" (the paper's energy, the default) or \
+                 \"kirchhoff-love\" (a thin shell of E, ν, thickness, density)",
+            );
+            MaterialModel::default()
+        }
+    }
+}
+
+/// The `[dnurbs]` options a shell refuses, naming each key: its weights are geometry, its rest
+/// shape is the surface and it is integrated over the surface (docs/math.md §10).
+fn check_shell_options(d: &DnurbsOptions, given: GivenKeys, p: &mut Problems) {
+    if d.weights_as_dofs {
+        p.push(
+            "dnurbs.weights_as_dofs",
+            "true",
+            "the Kirchhoff–Love shell's weights are part of its geometry, not unknowns",
+        );
+    }
+    if d.rest_shape != RestShape::Initial {
+        p.push(
+            "dnurbs.rest_shape",
+            format!("\"{}\"", d.rest_shape.name()),
+            "the Kirchhoff–Love shell's rest shape is the scene's surface",
+        );
+    }
+    if given.integrate_over && d.integration == Integration::Parameter {
+        p.push(
+            "dnurbs.integrate_over",
+            "\"parameter\"",
+            "the Kirchhoff–Love shell is integrated over the surface's area (\"area\", the \
+             shell's only measure): leave the key out",
+        );
     }
 }
 
@@ -571,9 +772,42 @@ fn check_param(p: &mut Problems, key: &str, x: f64, domain: (f64, f64)) {
     }
 }
 
-fn check_loads(l: &LoadsSpec, info: Option<&GeomInfo>, p: &mut Problems) {
+fn check_loads(
+    l: &LoadsSpec,
+    material: &MaterialModel,
+    d: &DnurbsOptions,
+    info: Option<&GeomInfo>,
+    p: &mut Problems,
+) {
     p.vec3("loads.gravity", &l.gravity);
     p.vec3("loads.distributed", &l.distributed);
+    for (k, e) in l.edge.iter().enumerate() {
+        let key = format!("loads.edge[{k}]");
+        p.vec3(&format!("{key}.force"), &e.force);
+        p.finite(&format!("{key}.moment"), e.moment);
+        if info.is_some_and(|g| !g.surface) {
+            p.push(
+                format!("{key}.edge"),
+                format!("\"{}\"", e.edge.name()),
+                "a curve has no edges: edge loads need a [surface]",
+            );
+        }
+        if e.moment != 0.0 && material.shell().is_none() {
+            p.push(
+                format!("{key}.moment"),
+                format_f64(e.moment),
+                "edge moments need model = \"kirchhoff-love\" (the tension plate has no \
+                 rotations)",
+            );
+        }
+        if d.weights_as_dofs {
+            p.push(
+                format!("{key}.edge"),
+                format!("\"{}\"", e.edge.name()),
+                "edge loads need constant weights (dnurbs.weights_as_dofs = false)",
+            );
+        }
+    }
     for (k, pl) in l.point.iter().enumerate() {
         let key = format!("loads.point[{k}]");
         p.vec3(&format!("{key}.force"), &pl.force);
@@ -657,6 +891,38 @@ fn check_constraints(
             if let Some(g) = info {
                 check_point_index(p, &format!("{tk}.point"), &term.point, g);
             }
+        }
+    }
+    for (k, e) in c.edge.iter().enumerate() {
+        let key = format!("constraints.edge[{k}]");
+        if info.is_some_and(|g| !g.surface) {
+            p.push(
+                format!("{key}.edge"),
+                format!("\"{}\"", e.edge.name()),
+                "a curve has no edges: edge conditions need a [surface] (a curve's ends are \
+                 held with constraints.fixed)",
+            );
+        }
+        match (e.condition, e.hold.is_empty()) {
+            (Some(_), false) => p.push(
+                format!("{key}.hold"),
+                format!("{:?}", e.hold),
+                "give either condition or hold, not both",
+            ),
+            (None, true) => p.push(
+                format!("{key}.condition"),
+                "",
+                "missing: give condition = \"clamped\", \"pinned\" or \"symmetry\", or the \
+                 components to hold, e.g. hold = [\"y\", \"z\"]",
+            ),
+            _ => {}
+        }
+        if e.hold.contains(&Component::W) {
+            p.push(
+                format!("{key}.hold"),
+                "\"w\"",
+                "edge conditions hold x, y and z; weights are held with constraints.fixed_weights",
+            );
         }
     }
     let Some(g) = info else { return };
@@ -824,7 +1090,7 @@ fn initial_spec(
 
 fn check_simulation(
     s: &SimulationSpec,
-    m: &Material,
+    m: &MaterialModel,
     d: &DnurbsOptions,
     info: Option<&GeomInfo>,
     p: &mut Problems,

@@ -84,7 +84,7 @@ fn trajectory_probes_are_the_surface_of_the_current_state() {
 #[test]
 fn steady_points_are_the_surface_at_the_nonlinear_equilibrium() {
     let scene = Scene::from_path(data("rational_sheet.toml")).unwrap();
-    let steady = steady_state(&scene).unwrap();
+    let steady = steady_state(&scene, &Default::default(), &mut |_| {}).unwrap();
     assert!(
         steady.iterations > 1 && steady.residual <= 1e-13,
         "{}",

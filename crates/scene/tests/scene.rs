@@ -63,12 +63,10 @@ fn paper_scene_is_read_as_in_spec() {
     }
     assert_eq!(s.flat_control_points()[7], [0.25, 2.5, 2.0]); // k = i * n_v + j = 1 * 5 + 2
     assert_eq!(s.flat_weights(), vec![1.0; 35]);
-    assert_eq!(scene.material.mu, 25.0);
-    assert_eq!((scene.material.beta11, scene.material.beta22), (0.01, 0.01));
-    assert_eq!(
-        scene.material.alpha11 + scene.material.gamma + scene.material.beta12,
-        0.0
-    );
+    let material = scene.material.tension_plate().unwrap();
+    assert_eq!(material.mu, 25.0);
+    assert_eq!((material.beta11, material.beta22), (0.01, 0.01));
+    assert_eq!(material.alpha11 + material.gamma + material.beta12, 0.0);
     assert_eq!(scene.constraints.fixed_rings, 2);
     assert_eq!(scene.initial.velocity, [0.0, 0.0, -0.2]);
     assert_eq!((scene.simulation.dt, scene.simulation.t_end), (0.08, 4.0));
@@ -125,8 +123,11 @@ fn defaults_apply_to_missing_sections() {
     let text =
         "[curve]\ndegree = 1\nknots = [0, 0, 1, 1]\ncontrol_points = [[0, 0, 0], [1, 0, 0]]\n";
     let scene = Scene::from_str(text, "c.toml").unwrap();
-    assert_eq!(scene.material, Material::default());
-    assert_eq!(scene.material.mu, 1.0);
+    assert_eq!(
+        scene.material,
+        nurbspring_dnurbs::MaterialModel::TensionPlate(Material::default())
+    );
+    assert_eq!(scene.material.tension_plate().unwrap().mu, 1.0);
     assert!(scene.constraints.fixed_weights);
     assert_eq!(
         scene.constraints.fixed_point_weights,
@@ -946,7 +947,7 @@ fn scene() -> impl Strategy<Value = Scene> {
             Scene {
                 path: PathBuf::from("random.toml"),
                 geometry,
-                material,
+                material: nurbspring_dnurbs::MaterialModel::TensionPlate(material),
                 loads: LoadsSpec {
                     gravity: [0.0, 0.0, -9.81],
                     distributed: velocity,
@@ -955,6 +956,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                         v: surface.then_some(0.5),
                         force: velocity,
                     }],
+                    edge: Vec::new(),
                 },
                 constraints: ConstraintsSpec {
                     fixed_rings,
