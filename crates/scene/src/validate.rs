@@ -162,7 +162,21 @@ pub(crate) fn build_scene(raw: RawScene, path: &Path) -> Result<Scene, SceneErro
         &mut p,
     );
     let method = raw.fit.derivation_for(&raw.dnurbs, &raw.constraints).0;
-    check_msm(&raw.msm, &raw.loads, method, info.as_ref(), &mut p);
+    check_msm(
+        &raw.msm,
+        &raw.material,
+        &raw.loads,
+        method,
+        info.as_ref(),
+        &mut p,
+    );
+    if raw.fit.mass == MassMethod::Fixed && raw.msm.mass.is_none() {
+        p.push(
+            "msm.mass",
+            "(not given)",
+            "fit.mass = \"fixed\" uses msm.mass as the node mass: give it, or let the derivation choose the mass (fit.mass = \"eigenvalue-scan\")",
+        );
+    }
     if raw.output.vtk_every == Some(0) {
         p.push("output.vtk_every", "0", "must be at least 1");
     }
@@ -904,6 +918,7 @@ fn time_problem(p: &mut Problems, key: &str, value: f64, what: &str) {
 
 fn check_msm(
     m: &MsmSpec,
+    material: &Material,
     loads: &LoadsSpec,
     method: Method,
     info: Option<&GeomInfo>,
@@ -939,7 +954,7 @@ fn check_msm(
     }
     // The spring keys are checked whatever the derivation: they also describe the lattice
     // `simulate --model msm` runs.
-    for e in build::lattice_options(m, loads.gravity, Method::Paper, curve).problems() {
+    for e in build::lattice_options(m, material, loads.gravity, Method::Paper, curve).problems() {
         match e {
             MsmError::InvalidOption { name, value, rule } => {
                 let key = match name.strip_prefix("gravity") {
