@@ -19,11 +19,13 @@ pub enum MsmError {
         /// Second node.
         b: usize,
     },
-    /// A spring naming a node that does not exist.
-    #[error("spring {spring} names node {node}, but the lattice has {n_nodes} nodes")]
+    /// A spring, linear element or probe naming a node that does not exist.
+    #[error("{of} {index} names node {node}, but the lattice has {n_nodes} nodes")]
     MissingNode {
-        /// Spring index.
-        spring: usize,
+        /// What names it: `"spring"`, `"linear element"` or `"probe"` (`probe_nodes`).
+        of: &'static str,
+        /// Its index.
+        index: usize,
         /// The node named.
         node: usize,
         /// Number of nodes.

@@ -251,13 +251,8 @@ impl Scene {
         overrides: &MsmOverrides,
     ) -> Result<LatticeOptions, Error> {
         let curve = !self.geometry.is_surface();
-        let mut options = lattice_options(
-            &self.msm,
-            &self.material,
-            self.loads.gravity,
-            method,
-            curve,
-        );
+        let mut options =
+            lattice_options(&self.msm, &self.material, self.loads.gravity, method, curve);
         for (class, k) in overrides.constants.iter() {
             options.constants.set(class, k);
         }

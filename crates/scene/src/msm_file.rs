@@ -89,7 +89,24 @@ pub fn msm_setup_from_text(
         lattice.set_mass(m);
     }
     let velocities = file.velocities().map_err(bad)?;
-    let centre = lattice_centre(&lattice);
+    let probe_nodes = match &file.probe_nodes {
+        Some(nodes) if !nodes.is_empty() => {
+            if let Some((k, &a)) = nodes
+                .iter()
+                .enumerate()
+                .find(|&(_, &a)| a >= lattice.n_nodes())
+            {
+                return Err(bad(nurbspring_msm::MsmError::MissingNode {
+                    of: "probe",
+                    index: k,
+                    node: a,
+                    n_nodes: lattice.n_nodes(),
+                }));
+            }
+            nodes.clone()
+        }
+        _ => vec![lattice_centre(&lattice)],
+    };
     let model = MsmModel::new(lattice).map_err(bad)?;
     let initial = model.initial_state(&velocities);
     Ok(MsmSetup {
@@ -98,7 +115,7 @@ pub fn msm_setup_from_text(
         model,
         initial,
         run: file.simulation.clone().unwrap_or(DEFAULT_RUN),
-        probe_nodes: vec![centre],
+        probe_nodes,
         save_every: 1,
         vtk_every: None,
     })
@@ -191,7 +208,9 @@ impl Scene {
             Geometry::Surface(surface) => {
                 SpringLattice::from_surface(surface, &options, model.fixed_points())
             }
-            Geometry::Curve(curve) => SpringLattice::from_curve(curve, &options, model.fixed_points()),
+            Geometry::Curve(curve) => {
+                SpringLattice::from_curve(curve, &options, model.fixed_points())
+            }
         }
         .map_err(|e| self.model_error(Some("msm"), e))?;
         let params = lattice.params.clone().unwrap_or_default();
@@ -230,11 +249,13 @@ pub fn msm_file(
     scene_label: &str,
     initial_velocities: &[[f64; 3]],
     run: FileSimulation,
+    probe_nodes: &[usize],
 ) -> MsmFile {
     MsmFile {
         scene: Some(scene_label.to_string()),
         initial_velocities: Some(initial_velocities.to_vec()),
         simulation: Some(run),
+        probe_nodes: Some(probe_nodes.to_vec()),
         ..lattice.to_file()
     }
 }

@@ -243,6 +243,7 @@ pub fn derived_msm_file(scene_label: &str, scene: &Scene, d: &Derivation) -> Opt
             scene_label,
             &d.node_velocities,
             run_settings(scene, d),
+            &d.probe_nodes,
         )
     })
 }
@@ -283,7 +284,7 @@ pub fn write_derived_files(
             &reduction_file(scene_label, r, &d.node_velocities),
         )?;
     }
-    write_central_node(out, d)?;
+    write_central_node(out, d, !scene.geometry.is_surface())?;
     write_plots(out, scene_label, d)
 }
 
@@ -307,7 +308,7 @@ pub fn write_reports(
 }
 
 /// `central_node.csv`: t, then the D-NURBS point and the MSM node, x, y, z.
-fn write_central_node(out: &Path, d: &Derivation) -> Result<(), Error> {
+fn write_central_node(out: &Path, d: &Derivation, curve: bool) -> Result<(), Error> {
     let t = &d.dnurbs_trajectory.t;
     let (a, b) = (&d.dnurbs_trajectory.probes[0], &d.msm_trajectory.probes[0]);
     let rows = (0..t.len().min(a.len()).min(b.len())).map(|s| {
@@ -316,13 +317,18 @@ fn write_central_node(out: &Path, d: &Derivation) -> Result<(), Error> {
         row.extend_from_slice(&b[s]);
         row
     });
-    write_csv(
-        out.join("central_node.csv"),
-        &[
-            "t", "dnurbs_x", "dnurbs_y", "dnurbs_z", "msm_x", "msm_y", "msm_z",
-        ],
-        rows,
-    )?;
+    // Where both are watched: the D-NURBS at the central node's own parameters.
+    let uv = d.probes.first().copied();
+    let at = crate::run::probe_label(None, uv, curve);
+    let node = crate::run::probe_label(d.probe_nodes.first().copied(), uv, curve);
+    let mut header = vec!["t".to_string()];
+    for (name, label) in [("dnurbs", &at), ("msm", &node)] {
+        for c in ["x", "y", "z"] {
+            header.push(format!("{name}_{c}[{label}]"));
+        }
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    write_csv(out.join("central_node.csv"), &header, rows)?;
     Ok(())
 }
 

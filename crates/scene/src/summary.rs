@@ -206,10 +206,7 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
             None
         };
         MsmSummary {
-            lattice: scene
-                .msm
-                .grid_for(nurbspring_derive::Method::Paper)
-                .name(),
+            lattice: scene.msm.grid_for(nurbspring_derive::Method::Paper).name(),
             nodes: lattice.n_nodes(),
             grid: lattice.grid,
             fixed_nodes: lattice.fixed.iter().filter(|&&f| f).count(),
