@@ -31,6 +31,21 @@ pub enum MsmError {
         /// Number of nodes.
         n_nodes: usize,
     },
+    /// A spring of an msm.json joining the same two nodes as an earlier one, of the same kind
+    /// and rest length: one spring of the summed constant is the same model.
+    #[error(
+        "spring {spring} joins nodes {a} and {b} like spring {first} (same kind and rest length): merge them into one spring of k = the sum of their constants"
+    )]
+    DuplicateSpring {
+        /// The later spring.
+        spring: usize,
+        /// The earlier one.
+        first: usize,
+        /// Its nodes.
+        a: usize,
+        /// Its nodes.
+        b: usize,
+    },
     /// A node mass that is zero or negative.
     #[error("node {node} has mass {mass}; masses must be positive")]
     NonPositiveMass {

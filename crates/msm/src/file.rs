@@ -252,7 +252,25 @@ impl SpringLattice {
             }
         };
         let mut springs = Vec::with_capacity(file.springs.len());
+        // (nodes, kind, rest length) → the first spring with them.
+        let mut seen: std::collections::HashMap<(usize, usize, SpringKind, Option<u64>), usize> =
+            std::collections::HashMap::with_capacity(file.springs.len());
         for (i, s) in file.springs.iter().enumerate() {
+            let key = (
+                s.a.min(s.b),
+                s.a.max(s.b),
+                s.kind,
+                s.rest_length.map(f64::to_bits),
+            );
+            if let Some(&first) = seen.get(&key) {
+                return Err(MsmError::DuplicateSpring {
+                    spring: i,
+                    first,
+                    a: s.a,
+                    b: s.b,
+                });
+            }
+            seen.insert(key, i);
             for node in [s.a, s.b] {
                 if node >= n {
                     return Err(MsmError::MissingNode {

@@ -583,6 +583,9 @@ pub fn default_frame_every(samples: usize) -> usize {
     samples.div_ceil(DEFAULT_MAX_FRAMES).max(1)
 }
 
+/// Largest number of probes a scene may ask for (`simulation.probes`).
+pub const MAX_PROBES: usize = 1000;
+
 /// Largest number of control points, lattice nodes or array entries a scene may ask for
 /// (10⁷); larger requests are refused before anything is allocated.
 pub const MAX_ITEMS: usize = 10_000_000;

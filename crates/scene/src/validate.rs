@@ -277,14 +277,37 @@ fn surface_spec(s: RawSurface, p: &mut Problems) -> Option<SurfaceSpec> {
         }
     }
     let n_u = s.control_points.len();
-    let n_v = s.control_points.first().map_or(0, Vec::len);
+    // The row length most rows have (ties: the one knots_v and degree_v imply, else row
+    // 0's), so that one short or long row is the one blamed.
+    let implied = s.knots_v.len().checked_sub(s.degree_v + 1);
+    let mut lengths: Vec<(usize, usize)> = Vec::new();
+    for row in &s.control_points {
+        match lengths.iter_mut().find(|(len, _)| *len == row.len()) {
+            Some((_, count)) => *count += 1,
+            None => lengths.push((row.len(), 1)),
+        }
+    }
+    let most = lengths.iter().map(|&(_, c)| c).max().unwrap_or(0);
+    let tied: Vec<usize> = lengths
+        .iter()
+        .filter(|&&(_, c)| c == most)
+        .map(|&(len, _)| len)
+        .collect();
+    let n_v = match implied {
+        Some(len) if tied.contains(&len) => len,
+        _ => tied.first().copied().unwrap_or(0),
+    };
+    let agreeing = lengths
+        .iter()
+        .find(|&&(len, _)| len == n_v)
+        .map_or(0, |&(_, c)| c);
     if n_u == 0 {
         p.push("surface.control_points", "[]", "no control points given");
     } else if n_v == 0 {
         p.push(
-            "surface.control_points[0]",
-            "[]",
-            "the first row of control points is empty",
+            "surface.control_points",
+            "[[], …]",
+            "the rows of control points are empty",
         );
     }
     if n_u.saturating_mul(n_v) > MAX_ITEMS {
@@ -301,7 +324,7 @@ fn surface_spec(s: RawSurface, p: &mut Problems) -> Option<SurfaceSpec> {
             p.push(
                 format!("surface.control_points[{i}]"),
                 format!("{} points", row.len()),
-                format!("every row must have {n_v} points, like row 0 (rows run along u, points in a row along v)"),
+                format!("every row must have {n_v} points, like {agreeing} of the {n_u} rows (rows run along u, points in a row along v)"),
             );
             continue;
         }
@@ -883,11 +906,13 @@ fn check_simulation(
             reason,
         );
     }
-    if s.probes.len() > MAX_ITEMS {
+    if s.probes.len() > MAX_PROBES {
         p.push(
             "simulation.probes",
             format!("{} probes", s.probes.len()),
-            format!("more than {MAX_ITEMS}"),
+            format!(
+                "more than {MAX_PROBES} (each is a column of trajectory.csv and a run of the validation; to follow the whole surface, read its ParaView frames)"
+            ),
         );
         return;
     }
