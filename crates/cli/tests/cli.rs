@@ -1658,3 +1658,42 @@ fn a_derived_model_keeps_every_probe() {
         assert_eq!(header[1 + 3 * p], want);
     }
 }
+
+/// reduction.json is not an MSM: `simulate` and `export` refuse it saying what it is and what
+/// to run instead (they used to fail on "unknown field `kind`"); derive's result line names
+/// the reduction and its mass, with no empty constants list.
+#[test]
+fn a_reduction_is_refused_by_simulate_and_export_with_what_to_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = bin()
+        .arg("derive")
+        .arg(paper())
+        .args(["--derivation", "reduction", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let line = String::from_utf8_lossy(&o.stdout);
+    assert!(line.starts_with("exact reduction onto"), "{line}");
+    assert!(!line.contains(": ,"), "{line}");
+    let file = out.join("reduction.json");
+    for args in [
+        vec!["simulate", "--model", "msm", "--out"],
+        vec!["export", "--format", "npz", "--out"],
+    ] {
+        let o = bin()
+            .arg(args[0])
+            .arg(&file)
+            .args(&args[1..])
+            .arg(dir.path().join("x"))
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("not a mass-spring model") && err.contains("DIR/msm.json"),
+            "{err}"
+        );
+    }
+}

@@ -253,25 +253,6 @@ impl Setup {
             .iter()
             .map(|&(u, v)| lattice.node_nearest(u, v))
             .collect();
-        // A probe of the scene whose node is fixed has no motion to compare (its relative
-        // error would be 0/0): refused, naming it. (The central probe is always there; at a
-        // fixed node both models stay still and agree exactly.)
-        if let Some((k, &a)) = probe_nodes
-            .iter()
-            .enumerate()
-            .skip(1)
-            .find(|&(_, &a)| lattice.fixed[a])
-        {
-            let (u, v) = config.probes[k];
-            return Err(DeriveError::InvalidOption {
-                name: "simulation.probes",
-                value: format!("[{u:?}, {v:?}]"),
-                reason: format!(
-                    "the lattice node nearest it (node {a}, at ({}, {})) is fixed, so there is no motion to compare there: put the probe where the surface moves",
-                    params[a].0, params[a].1
-                ),
-            });
-        }
         let probe_params: Vec<(f64, f64)> = probe_nodes.iter().map(|&a| params[a]).collect();
         let probe_omega = Omega::new(&config.geometry, &probe_params, weights_as_dofs)?;
         Ok(Self {

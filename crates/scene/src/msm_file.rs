@@ -82,7 +82,16 @@ pub fn msm_setup_from_text(
         path: path.to_path_buf(),
         source: Box::new(source),
     };
-    let file = MsmFile::from_json_str(text).map_err(bad)?;
+    let file = MsmFile::from_json_str(text).map_err(|e| {
+        if is_reduction_file(text) {
+            return Error::Option {
+                name: path.display().to_string(),
+                value: "(reduction.json)".to_string(),
+                message: REDUCTION_FILE.to_string(),
+            };
+        }
+        bad(e)
+    })?;
     let mut lattice = SpringLattice::from_file(&file).map_err(bad)?;
     lattice.set_constants(&overrides.constants);
     if let Some(m) = overrides.mass {
@@ -119,6 +128,25 @@ pub fn msm_setup_from_text(
         save_every: 1,
         vtk_every: None,
     })
+}
+
+/// Why `simulate` and `export` do not take a reduction.json, and what to do instead.
+pub const REDUCTION_FILE: &str = "this is the `reduction` derivation's reduction.json, the exact \
+     reduction of the D-NURBS onto the nodes (dense node-space matrices M_T, K_T: a linear model, \
+     not a mass-spring model), which `simulate --model msm` and `export --format sofa|npz` do \
+     not run. `derive` has already simulated it: its central_node.csv and report.json hold its \
+     run against the D-NURBS (the reference any MSM is judged against). For a model to simulate \
+     or export, derive an MSM: `nurbspring derive SCENE --out DIR` (modal) or `--derivation \
+     paper` (springs), and use DIR/msm.json";
+
+/// True when `text` is a reduction.json (`"kind": "…"` beside `"stiffness"` at the top level).
+fn is_reduction_file(text: &str) -> bool {
+    #[derive(serde::Deserialize)]
+    struct Probe {
+        kind: Option<serde::de::IgnoredAny>,
+        stiffness: Option<serde::de::IgnoredAny>,
+    }
+    serde_json::from_str::<Probe>(text).is_ok_and(|p| p.kind.is_some() && p.stiffness.is_some())
 }
 
 /// The node nearest the centre of the nodes' parameters (or of the grid, or of the nodes'
