@@ -771,8 +771,8 @@ fn matrices_and_derive_print_json() {
     for needle in [
         "D-NURBS total (kinetic + elastic + load)",
         "D-NURBS kinetic",
-        "derived MSM total (kinetic + elastic + load)",
-        "derived MSM kinetic",
+        "MSM total (kinetic + elastic + load)",
+        "MSM kinetic",
         "energy / largest kinetic + elastic energy of the model",
     ] {
         assert!(energy.contains(needle), "{needle}");

@@ -133,7 +133,9 @@ fn mass_text(derivation: &nurbspring_derive::Derivation, m: f64) -> String {
     };
     let (lo, hi) = free
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
     if free.is_empty() || lo == hi {
         format!("m = {m:.6}")
     } else {
