@@ -235,7 +235,7 @@ pub fn main_with_args() -> ExitCode {
     }
     let mut limits = Limits::from_system();
     if let Some(m) = cli.global.max_memory {
-        limits.memory = m;
+        limits = limits.with_memory(m);
     }
     if let Some(o) = cli.global.max_output {
         limits.output = o;

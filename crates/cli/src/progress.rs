@@ -1,21 +1,94 @@
-//! Progress bars on stderr, shown only on a terminal, without `--quiet`, and for work that
-//! takes longer than about a second (indicatif draws nothing before its first tick interval).
+//! Progress on stderr without `--quiet`: a bar on a terminal, for work that takes longer than
+//! about a second (indicatif draws nothing before its first tick interval); with no terminal
+//! (piped or redirected output) a plain line at most every [`LINE_EVERY`], with the position
+//! when there is one, so a long run is never silent for minutes.
 
 use std::io::IsTerminal;
-use std::time::Duration;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// Shortest time between two progress lines written without a terminal.
+pub const LINE_EVERY: Duration = Duration::from_secs(10);
+
+/// The line printer of a run without a terminal: a thread that wakes every second and writes
+/// `what: done/total (elapsed)` when [`LINE_EVERY`] has passed since the last line.
+struct Lines {
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    done: Arc<AtomicU64>,
+    total: Arc<AtomicU64>,
+}
+
+impl Lines {
+    fn start(what: String, total: u64) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let done = Arc::new(AtomicU64::new(0));
+        let total = Arc::new(AtomicU64::new(total));
+        let (s, d, t) = (stop.clone(), done.clone(), total.clone());
+        let thread = std::thread::Builder::new()
+            .name("progress".into())
+            .spawn(move || {
+                let start = Instant::now();
+                let last = Mutex::new(start);
+                while !s.load(Ordering::Relaxed) {
+                    std::thread::sleep(Duration::from_millis(250));
+                    let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
+                    if l.elapsed() >= LINE_EVERY && !s.load(Ordering::Relaxed) {
+                        *l = Instant::now();
+                        let (d, t) = (d.load(Ordering::Relaxed), t.load(Ordering::Relaxed));
+                        let secs = start.elapsed().as_secs();
+                        let label = if what.is_empty() {
+                            "running"
+                        } else {
+                            what.as_str()
+                        };
+                        if t > 1 {
+                            let eta = if d > 0 && d < t {
+                                format!(", eta {} s", secs * (t - d) / d)
+                            } else {
+                                String::new()
+                            };
+                            eprintln!("progress: {label}: {d}/{t} ({secs} s{eta})");
+                        } else {
+                            eprintln!("progress: {label}: still running ({secs} s)");
+                        }
+                    }
+                }
+            })
+            .ok();
+        Lines {
+            stop,
+            thread,
+            done,
+            total,
+        }
+    }
+
+    fn finish(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-/// A progress bar that is hidden when it should not be drawn.
+/// A progress bar that is hidden when it should not be drawn (lines instead without a
+/// terminal).
 pub struct Progress {
     bar: ProgressBar,
+    lines: Mutex<Option<Lines>>,
 }
 
 impl Progress {
     /// A bar of `total` steps labelled `what`.
     pub fn new(quiet: bool, what: &str, total: u64) -> Self {
         let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
-        if !quiet && std::io::stderr().is_terminal() {
+        let terminal = std::io::stderr().is_terminal();
+        let lines = (!quiet && !terminal).then(|| Lines::start(what.to_string(), total));
+        if !quiet && terminal {
             bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(8));
             bar.set_style(
                 ProgressStyle::with_template(
@@ -28,17 +101,26 @@ impl Progress {
             // Nothing is drawn for short runs: the first draw happens after a second.
             bar.enable_steady_tick(Duration::from_millis(1000));
         }
-        Self { bar }
+        Self {
+            bar,
+            lines: Mutex::new(lines),
+        }
     }
 
     /// Sets the position.
     pub fn set(&self, done: u64) {
         self.bar.set_position(done);
+        if let Some(l) = &*self.lines.lock().unwrap_or_else(|e| e.into_inner()) {
+            l.done.store(done, Ordering::Relaxed);
+        }
     }
 
     /// Sets the total.
     pub fn set_total(&self, total: u64) {
         self.bar.set_length(total);
+        if let Some(l) = &*self.lines.lock().unwrap_or_else(|e| e.into_inner()) {
+            l.total.store(total, Ordering::Relaxed);
+        }
     }
 
     /// Sets the position and the total.
@@ -50,11 +132,14 @@ impl Progress {
     /// Removes the bar.
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+        if let Some(l) = &mut *self.lines.lock().unwrap_or_else(|e| e.into_inner()) {
+            l.finish();
+        }
     }
 }
 
 impl Drop for Progress {
     fn drop(&mut self) {
-        self.bar.finish_and_clear();
+        self.finish();
     }
 }

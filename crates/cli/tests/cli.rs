@@ -205,8 +205,9 @@ fn simulate_dnurbs_writes_trajectory_energy_and_series() {
         .success();
     let traj = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
     let header = traj.lines().next().unwrap();
+    // Each probe's column says where it is (the centre of the domain first).
     assert!(
-        header.starts_with("t,probe0_x,probe0_y,probe0_z"),
+        header.starts_with("t,probe0_x[u=0.5;v=0.5],probe0_y[u=0.5;v=0.5],probe0_z[u=0.5;v=0.5]"),
         "{header}"
     );
     assert_eq!(traj.lines().count(), 1 + 11);
@@ -770,8 +771,8 @@ fn matrices_and_derive_print_json() {
     for needle in [
         "D-NURBS total (kinetic + elastic + load)",
         "D-NURBS kinetic",
-        "derived MSM total (kinetic + elastic + load)",
-        "derived MSM kinetic",
+        "MSM total (kinetic + elastic + load)",
+        "MSM kinetic",
         "energy / largest kinetic + elastic energy of the model",
     ] {
         assert!(energy.contains(needle), "{needle}");
@@ -824,7 +825,8 @@ fn derive_writes_everything_and_msm_json_round_trips() {
     let csv = std::fs::read_to_string(dir.path().join("central_node.csv")).unwrap();
     assert_eq!(
         csv.lines().next().unwrap(),
-        "t,dnurbs_x,dnurbs_y,dnurbs_z,msm_x,msm_y,msm_z"
+        // Where each model is watched: the D-NURBS at the central node's parameters.
+        "t,dnurbs_x[u=0.5;v=0.5],dnurbs_y[u=0.5;v=0.5],dnurbs_z[u=0.5;v=0.5],msm_x[node=7;u=0.5;v=0.5],msm_y[node=7;u=0.5;v=0.5],msm_z[node=7;u=0.5;v=0.5]"
     );
     let sim_dir = dir.path().join("sim");
     bin()
@@ -1475,7 +1477,9 @@ fn derive_report_values_follow_from_its_files() {
     let rows = csv_rows(
         dir.path(),
         "central_node.csv",
-        Some("t,dnurbs_x,dnurbs_y,dnurbs_z,msm_x,msm_y,msm_z"),
+        Some(
+            "t,dnurbs_x[u=0.5;v=0.5],dnurbs_y[u=0.5;v=0.5],dnurbs_z[u=0.5;v=0.5],msm_x[node=7;u=0.5;v=0.5],msm_y[node=7;u=0.5;v=0.5],msm_z[node=7;u=0.5;v=0.5]",
+        ),
     );
     let validation = &report["validation"];
     assert_eq!(rows.len() as u64, validation["samples"].as_u64().unwrap());
@@ -1519,4 +1523,177 @@ fn derive_report_values_follow_from_its_files() {
     assert!(rel(num(&report["mass"]["free_msm"]), free) < 1e-12);
     // The D-NURBS mass is μ × parameter area (25 for the paper's sheet).
     assert!(rel(num(&report["mass"]["total_dnurbs"]), 25.0) < 1e-12);
+}
+
+/// A damped cloth with no `[msm]` constants and two probes of its own.
+fn cloth_without_constants(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(paper())
+        .unwrap()
+        .lines()
+        .filter(|l| {
+            !["k_edge", "k_diag", "mass =", "damping ="]
+                .iter()
+                .any(|k| l.starts_with(k))
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        .replace("gamma = 0.0", "gamma = 0.5")
+        .replace(
+            "t_end = 4.0",
+            "t_end = 0.8\nprobes = [[0.2, 0.3], [0.7, 0.6]]",
+        );
+    let path = dir.join("cloth.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A scene without its MSM's constants has no model of its own: `simulate --model msm`,
+/// `stability` and `export --format sofa|npz` refuse it (exit 2) naming the keys and the
+/// command that derives one, instead of writing k = 1 and 1 kg a node; with the constants given
+/// as flags they run. `check` says which keys are missing and computes no stability limit.
+#[test]
+fn a_scene_without_msm_constants_is_never_run_from_placeholders() {
+    let dir = tempfile::tempdir().unwrap();
+    let cloth = cloth_without_constants(dir.path());
+    let text = std::fs::read_to_string(&cloth).unwrap();
+    assert!(
+        !text.contains("k_edge") && text.contains("gamma = 0.5"),
+        "{text}"
+    );
+    let refused = |args: &[&str]| {
+        let out = bin().args(args).arg(&cloth).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        for needle in ["msm.k_edge", "msm.k_diag", "msm.mass", "nurbspring derive"] {
+            assert!(err.contains(needle), "{args:?}: {err}");
+        }
+    };
+    let out = dir.path().join("x");
+    let out = out.to_str().unwrap();
+    refused(&["simulate", "--model", "msm", "--out", out]);
+    refused(&["export", "--format", "sofa", "--out", out]);
+    refused(&["export", "--format", "npz", "--out", out]);
+    refused(&["stability"]);
+    assert!(!Path::new(out).exists());
+    let check = bin()
+        .arg("check")
+        .arg("--json")
+        .arg(&cloth)
+        .output()
+        .unwrap();
+    assert!(check.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&check.stdout).unwrap();
+    assert_eq!(
+        v["msm"]["missing"],
+        serde_json::json!(["msm.k_edge", "msm.k_diag", "msm.mass"])
+    );
+    assert!(v["msm"]["dt_critical"].is_null());
+    assert_eq!(v["derive"]["lattice"], "greville");
+    assert_eq!(v["simulation"]["steps"], 10);
+    // Given as flags, the lattice runs; its damping is the material's per unit mass, γ/μ · m.
+    let sofa = dir.path().join("cloth.py");
+    bin()
+        .arg("export")
+        .arg(&cloth)
+        .args([
+            "--format", "sofa", "--k-edge", "2", "--k-diag", "1", "--mass", "0.4",
+        ])
+        .arg("--out")
+        .arg(&sofa)
+        .assert()
+        .success();
+    let py = std::fs::read_to_string(&sofa).unwrap();
+    assert!(
+        py.contains("NODE_DAMPING = 0.008"),
+        "γ/μ · m = 0.5/25 · 0.4"
+    );
+    assert!(py.contains("runSofa cloth.py") && !py.contains("{this file}"));
+}
+
+/// Every probe of a scene survives into msm.json (`probe_nodes`, the centre first), and the
+/// trajectory of the derived model records each one, its column naming the node and its (u, v).
+#[test]
+fn a_derived_model_keeps_every_probe() {
+    let dir = tempfile::tempdir().unwrap();
+    let cloth = cloth_without_constants(dir.path());
+    let derived = dir.path().join("d");
+    bin()
+        .arg("derive")
+        .arg(&cloth)
+        .args(["--derivation", "paper", "-q", "--out"])
+        .arg(&derived)
+        .assert()
+        .success();
+    let msm: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(derived.join("msm.json")).unwrap()).unwrap();
+    let probes = msm["probe_nodes"].as_array().unwrap();
+    assert_eq!(probes.len(), 3);
+    // Node damping is γ/μ times the node mass (the paper's derivation too).
+    for node in msm["nodes"].as_array().unwrap() {
+        let (m, c) = (
+            node["mass"].as_f64().unwrap(),
+            node["damping"].as_f64().unwrap(),
+        );
+        assert!((c - 0.02 * m).abs() <= 1e-15, "{c} vs {m}");
+    }
+    let run = dir.path().join("run");
+    bin()
+        .arg("simulate")
+        .arg(derived.join("msm.json"))
+        .args(["--model", "msm", "-q", "--out"])
+        .arg(&run)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(run.join("trajectory.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    assert_eq!(header.len(), 1 + 3 * 3);
+    for (p, node) in probes.iter().enumerate() {
+        let a = node.as_u64().unwrap() as usize;
+        let uv = msm["nodes"][a]["uv"].as_array().unwrap();
+        let want = format!(
+            "probe{p}_x[node={a};u={};v={}]",
+            uv[0].as_f64().unwrap(),
+            uv[1].as_f64().unwrap()
+        );
+        assert_eq!(header[1 + 3 * p], want);
+    }
+}
+
+/// reduction.json is not an MSM: `simulate` and `export` refuse it saying what it is and what
+/// to run instead (they used to fail on "unknown field `kind`"); derive's result line names
+/// the reduction and its mass, with no empty constants list.
+#[test]
+fn a_reduction_is_refused_by_simulate_and_export_with_what_to_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = bin()
+        .arg("derive")
+        .arg(paper())
+        .args(["--derivation", "reduction", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let line = String::from_utf8_lossy(&o.stdout);
+    assert!(line.starts_with("exact reduction onto"), "{line}");
+    assert!(!line.contains(": ,"), "{line}");
+    let file = out.join("reduction.json");
+    for args in [
+        vec!["simulate", "--model", "msm", "--out"],
+        vec!["export", "--format", "npz", "--out"],
+    ] {
+        let o = bin()
+            .arg(args[0])
+            .arg(&file)
+            .args(&args[1..])
+            .arg(dir.path().join("x"))
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("not a mass-spring model") && err.contains("DIR/msm.json"),
+            "{err}"
+        );
+    }
 }

@@ -664,13 +664,23 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
         .arg(&derived)
         .assert()
         .success();
-    let models = [
-        small_msm(dir.path(), true, true),
-        derived.join("msm.json"),
+    // (model, integrator: None runs the one the archive records, with no flag to simulate).
+    let small = small_msm(dir.path(), true, true);
+    let models: [(PathBuf, Option<&str>); 7] = [
+        (small.clone(), Some("symplectic-euler")),
+        (small.clone(), Some("verlet")),
+        (small.clone(), Some("rk4")),
+        (small.clone(), Some("backward-euler")),
+        (small, Some("newmark")),
+        // Linear elements only: its recorded integrator is modal.
+        (derived.join("msm.json"), None),
         // A scene's own lattice: damping, gravity, two probes, every 10th step kept.
-        examples().join("sheet_gravity.toml"),
+        (
+            examples().join("sheet_gravity.toml"),
+            Some("symplectic-euler"),
+        ),
     ];
-    for (k, model) in models.iter().enumerate() {
+    for (k, (model, integrator)) in models.iter().enumerate() {
         let npz = dir.path().join(format!("model{k}.npz"));
         bin()
             .arg("export")
@@ -680,26 +690,19 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
             .assert()
             .success();
         let run = dir.path().join(format!("run{k}"));
-        bin()
-            .arg("simulate")
-            .arg(model)
-            .args([
-                "--model",
-                "msm",
-                "--integrator",
-                "symplectic-euler",
-                "--out",
-            ])
-            .arg(&run)
-            .assert()
-            .success();
+        let mut simulate = bin();
+        simulate.arg("simulate").arg(model).args(["--model", "msm"]);
+        if let Some(i) = integrator {
+            simulate.args(["--integrator", i]);
+        }
+        simulate.arg("--out").arg(&run).assert().success();
         let theirs = dir.path().join(format!("numpy{k}.csv"));
-        let out = Process::new(&python)
-            .arg(&script)
-            .arg(&npz)
-            .arg(&theirs)
-            .output()
-            .unwrap();
+        let mut python_run = Process::new(&python);
+        python_run.arg(&script).arg(&npz).arg(&theirs);
+        if let Some(i) = integrator {
+            python_run.arg(i);
+        }
+        let out = python_run.output().unwrap();
         assert!(
             out.status.success(),
             "{}",
@@ -707,6 +710,29 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
         );
         assert_same_trajectory(&run.join("trajectory.csv"), &theirs);
     }
+    // Above the explicit limit the script refuses rather than stepping into overflow.
+    let stiff = dir.path().join("stiff.npz");
+    bin()
+        .arg("export")
+        .arg(examples().join("sheet_gravity.toml"))
+        .args(["--format", "npz", "--k-edge", "1e6", "--out"])
+        .arg(&stiff)
+        .assert()
+        .success();
+    let out = Process::new(&python)
+        .arg(&script)
+        .arg(&stiff)
+        .arg(dir.path().join("never.csv"))
+        .arg("symplectic-euler")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("unstable at dt") && err.contains("dt_critical"),
+        "{err}"
+    );
+    assert!(!dir.path().join("never.csv").exists());
 }
 
 /// The meshio snippet of docs/export.md ("The lattice in other tools") turns the `.npz` of the

@@ -339,3 +339,196 @@ fn sigterm_ends_a_non_cancellable_command_at_once() {
     assert_eq!(code, Some(130));
     assert_eq!(names(dir.path()), ["scene.toml"]);
 }
+
+#[path = "../../scene/tests/support/sheet.rs"]
+mod sheet;
+
+/// `sh -c 'ulimit -v KIB && exec nurbspring ARGS'`: the command under an address-space limit.
+fn under_address_limit(kib: u64, args: &[&str]) -> std::process::Output {
+    let bin = assert_cmd::cargo::cargo_bin("nurbspring");
+    let mut line = format!("ulimit -v {kib} && exec '{}' --quiet", bin.display());
+    for a in args {
+        line.push_str(&format!(" '{a}'"));
+    }
+    std::process::Command::new("sh")
+        .args(["-c", &line])
+        .output()
+        .unwrap()
+}
+
+/// A hostile-input campaign found `check` and `derive` of a 400 × 400 net aborting (SIGABRT on
+/// a failed allocation) under `ulimit -v 4194304`: the limits now respect RLIMIT_AS, so both
+/// are refused up front (exit 2, naming the limit), and no staging folder is left behind.
+#[test]
+fn an_address_space_limit_refuses_what_would_not_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("sheet400.toml");
+    std::fs::write(&scene, sheet::sheet_text(400, 0.01)).unwrap();
+    let scene = scene.to_str().unwrap().to_string();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap().to_string();
+    for args in [
+        vec!["check", scene.as_str()],
+        vec!["derive", scene.as_str(), "--out", out.as_str()],
+        vec!["modes", scene.as_str()],
+    ] {
+        let o = under_address_limit(4 << 20, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("ulimit -v"), "{args:?}: {err}");
+    }
+    assert_eq!(names(dir.path()), vec!["sheet400.toml".to_string()]);
+    // --max-memory cannot lift the limit above the address space left.
+    let o = under_address_limit(4 << 20, &["--max-memory", "100G", "check", &scene]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+/// Every number of report.json of a hostile derivation is a number (JSON has no NaN: serde
+/// writes null), or the derivation is refused naming why.
+fn assert_no_null(value: &serde_json::Value, path: &str) {
+    match value {
+        serde_json::Value::Null => panic!("null at {path}"),
+        serde_json::Value::Array(a) => {
+            for (i, v) in a.iter().enumerate() {
+                assert_no_null(v, &format!("{path}[{i}]"));
+            }
+        }
+        serde_json::Value::Object(m) => {
+            for (k, v) in m {
+                // The frequency table's MAC is absent by design for spring lattices.
+                if k == "mac" && v.is_null() {
+                    continue;
+                }
+                assert_no_null(v, &format!("{path}/{k}"));
+            }
+        }
+        _ => {}
+    }
+}
+
+/// A curve whose end knot is 1 + 2⁻⁵², a degree-20 Bézier curve, probes at (1, 1) and at
+/// subnormal parameters: each derivation finishes with numbers only (a probe whose models both
+/// stay still has relative RMS 0; it was 0/0, written as null).
+#[test]
+fn hostile_derivations_report_numbers_or_refuse() {
+    let dir = tempfile::tempdir().unwrap();
+    let string = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/string.toml"),
+    )
+    .unwrap()
+    .replace("t_end = 4.0", "t_end = 1.0");
+    let end_knot = string.replace("1.0, 1.0, 1.0, 1.0]", "1.0, 1.0, 1.0, 1.0000000000000002]");
+    assert_ne!(end_knot, string);
+    let p = 20;
+    let points: Vec<String> = (0..=p)
+        .map(|i| format!("[{:?}, 0.0, 0.0]", 2.0 * i as f64 / p as f64))
+        .collect();
+    let velocities: Vec<String> = (0..=p)
+        .map(|i| {
+            format!(
+                "[0.0, 0.0, {:?}]",
+                if i == 0 || i == p { 0.0 } else { -0.1 }
+            )
+        })
+        .collect();
+    let bezier = format!(
+        "[curve]\ndegree = {p}\nknots = {:?}\ncontrol_points = [{}]\n[material]\nmu = 0.5\n\
+         alpha11 = 0.5\n[constraints]\nfixed_rings = 1\n[initial]\nvelocities = [{}]\n\
+         [simulation]\ndt = 0.01\nt_end = 1.0\n",
+        [vec![0.0; p + 1], vec![1.0; p + 1]].concat(),
+        points.join(", "),
+        velocities.join(", ")
+    );
+    let probes_at = |probes: &str| {
+        std::fs::read_to_string(paper())
+            .unwrap()
+            .replace("t_end = 4.0", &format!("t_end = 0.8\nprobes = {probes}"))
+    };
+    for (k, (text, refused)) in [
+        (end_knot, false),
+        (bezier, false),
+        // The paper's sheet is clamped by two rings: both probes sit on fixed nodes, where
+        // both models stay still and agree exactly (relative RMS 0, not 0/0).
+        (probes_at("[[1.0, 1.0]]"), false),
+        (probes_at("[[0.5, 0.5], [5e-324, 5e-324]]"), false),
+        (probes_at("[[0.5, 0.5], [0.4, 0.5]]"), false),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let scene = dir.path().join(format!("hostile{k}.toml"));
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.path().join(format!("out{k}"));
+        let o = bin()
+            .arg("derive")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        if refused {
+            assert_eq!(o.status.code(), Some(2), "{k}: {err}");
+            assert!(
+                err.contains("simulation.probes") && err.contains("fixed"),
+                "{err}"
+            );
+            continue;
+        }
+        assert!(o.status.success(), "{k}: {err}");
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        assert_no_null(&report, &format!("hostile{k}"));
+    }
+}
+
+/// 100 000 probes and 200 000 duplicate springs took over 20 s: both are refused at once, with
+/// the limit or what to do.
+#[test]
+fn huge_probe_lists_and_duplicate_springs_are_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let probes: Vec<String> = (0..100_000)
+        .map(|i| format!("[{:?}, 0.5]", 0.1 + 0.8 * i as f64 / 100_000.0))
+        .collect();
+    let scene = paper_with(
+        dir.path(),
+        "t_end = 4.0",
+        &format!("t_end = 4.0\nprobes = [{}]", probes.join(", ")),
+    );
+    let start = Instant::now();
+    let o = bin().arg("check").arg(&scene).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("simulation.probes") && err.contains("1000"),
+        "{err}"
+    );
+    let mut springs = vec![r#"{"a": 0, "b": 1, "k": 1}"#; 100_000];
+    springs.extend(vec![r#"{"a": 1, "b": 2, "k": 1}"#; 100_000]);
+    let msm = dir.path().join("dup.json");
+    std::fs::write(
+        &msm,
+        format!(
+            r#"{{"nodes": [{{"position": [0, 0, 0], "mass": 1, "fixed": true}},
+                {{"position": [1, 0, 0], "mass": 1}}, {{"position": [2, 0, 0], "mass": 1}}],
+                "springs": [{}]}}"#,
+            springs.join(", ")
+        ),
+    )
+    .unwrap();
+    let o = bin()
+        .arg("simulate")
+        .arg(&msm)
+        .args(["--model", "msm", "--out"])
+        .arg(dir.path().join("run"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("spring 1 joins nodes 0 and 1 like spring 0"),
+        "{err}"
+    );
+    assert!(start.elapsed() < Duration::from_secs(20));
+}

@@ -183,6 +183,10 @@ pub struct Config {
     /// Constants and node mass given by the scene (for the paper's scene, the published
     /// ones), evaluated beside the derived ones.
     pub given: Option<(Constants, f64)>,
+    /// The damping coefficient of every node of the paper's lattice when the scene gives one
+    /// (`msm.damping`); `None`: the D-NURBS's damping per unit mass, `γ/μ` times the node
+    /// mass (the D-NURBS's `D = (γ/μ) M`, as the linear derivations' nodes carry it).
+    pub node_damping: Option<f64>,
 }
 
 /// The two fit problems of eq. (15): every dof, free dofs.
@@ -206,6 +210,9 @@ pub struct Setup {
     probe_nodes: Vec<usize>,
     probe_params: Vec<(f64, f64)>,
     probe_omega: Omega,
+    /// `Config::node_damping`, and `γ/μ` for the nodes whose damping follows their mass.
+    node_damping: Option<f64>,
+    damping_ratio: f64,
 }
 
 impl Setup {
@@ -259,6 +266,8 @@ impl Setup {
             probe_nodes,
             probe_params,
             probe_omega,
+            node_damping: config.node_damping,
+            damping_ratio: config.material.gamma / config.material.mu,
         })
     }
 
@@ -359,12 +368,20 @@ impl Setup {
         Ok((at(&fits.all)?, at(&fits.free)?))
     }
 
-    /// The lattice with the given constants and uniform node mass.
+    /// The lattice with the given constants and uniform node mass, every node damped by
+    /// [`Setup::node_damping`] of that mass.
     pub fn lattice_with(&self, constants: &Constants, m: f64) -> SpringLattice {
         let mut lattice = self.lattice.clone();
         lattice.set_constants(constants);
         lattice.set_mass(m);
+        lattice.set_damping(self.node_damping(m));
         lattice
+    }
+
+    /// The damping coefficient of a node of mass `m`: the scene's `msm.damping` when it gives
+    /// one, else `γ/μ · m` (the D-NURBS's damping per unit mass).
+    pub fn node_damping(&self, m: f64) -> f64 {
+        self.node_damping.unwrap_or(self.damping_ratio * m)
     }
 
     /// ω_max and 2/ω_max of the MSM with these parameters.

@@ -44,5 +44,6 @@ pub(crate) fn config(geometry: Geometry) -> Config {
         fit: FitOptions::default(),
         probes: vec![(0.5, 0.5)],
         given: None,
+        node_damping: None,
     }
 }

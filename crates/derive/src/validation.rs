@@ -115,6 +115,9 @@ pub fn compare(t: &[f64], reference: &[f64], other: &[f64]) -> Comparison {
         reference_amplitude: amplitude,
         relative_rms: if amplitude > 0.0 {
             rms / amplitude
+        } else if rms == 0.0 {
+            // Both still: they agree exactly.
+            0.0
         } else {
             f64::NAN
         },
@@ -273,6 +276,9 @@ pub fn compare_points(t: &[f64], reference: &[[f64; 3]], other: &[[f64; 3]]) -> 
         reference_amplitude: amplitude,
         relative_rms: if amplitude > 0.0 {
             rms / amplitude
+        } else if rms == 0.0 {
+            // Both still: they agree exactly.
+            0.0
         } else {
             f64::NAN
         },

@@ -78,6 +78,7 @@ fn config(method: Method) -> Config {
         fit: FitOptions::default(),
         probes: vec![(0.5, 0.5)],
         given: None,
+        node_damping: None,
     }
 }
 

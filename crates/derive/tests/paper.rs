@@ -52,6 +52,7 @@ fn paper_config() -> Config {
         fit: FitOptions::default(),
         probes: vec![(0.5, 0.5)],
         given: Some((paper_constants(), 0.005)),
+        node_damping: None,
     }
 }
 

@@ -61,6 +61,7 @@ fn config(gamma: f64, rest_shape: RestShape, dt: f64) -> Config {
         fit: FitOptions::default(),
         probes: vec![(0.5, 0.5)],
         given: None,
+        node_damping: None,
     }
 }
 

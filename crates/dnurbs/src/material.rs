@@ -163,6 +163,15 @@ impl MaterialModel {
         }
     }
 
+    /// The damping per unit mass, `γ / μ` (the shell: `γ / ρt`): the D-NURBS's `D` is this
+    /// times its `M` (docs/math.md §3).
+    pub fn damping_per_mass(&self) -> f64 {
+        match self {
+            MaterialModel::TensionPlate(m) => m.gamma / m.mu,
+            MaterialModel::KirchhoffLove(m) => m.gamma / m.mass_per_area(),
+        }
+    }
+
     /// The mass-proportional damping γ.
     pub fn gamma(&self) -> f64 {
         match self {

@@ -381,11 +381,29 @@ fn log_range(values: impl Iterator<Item = f64>) -> Range<f64> {
     };
     let lo = if lo > 0.0 { lo } else { f64::MIN_POSITIVE };
     let hi = if hi.is_finite() { hi } else { f64::MAX };
-    lo..hi
+    // Out to the nearest 1, 2 or 5 times a power of ten, so both ends carry a label.
+    let nice = |x: f64, up: bool| {
+        let e = 10f64.powf(x.log10().floor());
+        let steps = [1.0, 2.0, 5.0, 10.0];
+        let m = x / e;
+        let pick = if up {
+            steps.iter().copied().find(|&s| s >= m * (1.0 - 1e-12))
+        } else {
+            steps
+                .iter()
+                .rev()
+                .copied()
+                .find(|&s| s <= m * (1.0 + 1e-12))
+        };
+        let v = pick.unwrap_or(1.0) * e;
+        if v.is_finite() && v > 0.0 { v } else { x }
+    };
+    nice(lo, false)..nice(hi, true)
 }
 
-/// The corner of the plot area covering the fewest data points, for the legend box.
-fn legend_corner(series: &[Series], log_y: bool) -> SeriesLabelPosition {
+/// The corner of the plot area covering the fewest data points, how many it covers there, and
+/// the fraction of the plot's height the legend box takes.
+fn legend_place(series: &[Series], log_y: bool) -> (SeriesLabelPosition, usize, f64) {
     let ty = |y: f64| if log_y { y.log10() } else { y };
     let pts: Vec<(f64, f64)> = series
         .iter()
@@ -417,7 +435,41 @@ fn legend_corner(series: &[Series], log_y: bool) -> SeriesLabelPosition {
             best = (count, pos);
         }
     }
-    best.1
+    (best.1, best.0, height)
+}
+
+/// The largest caption font size (at most `size`, at least 10 pixels a unit of `px`) whose
+/// text fits `width` pixels, so a long title is not clipped at both edges.
+fn caption_size<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    caption: &str,
+    size: u32,
+    width: u32,
+    px: u32,
+) -> u32 {
+    let mut s = size;
+    while s > 10 * px {
+        match root.estimate_text_size(caption, &(FONT_FAMILY, s).into_text_style(root)) {
+            Ok((w, _)) if w <= width => return s,
+            Err(_) => return s,
+            _ => s -= px,
+        }
+    }
+    s
+}
+
+/// A log axis label with two significant digits (`0.2`, `0.015`, `3e-5`).
+fn log_label(v: &f64) -> String {
+    if *v <= 0.0 || !v.is_finite() {
+        return String::new();
+    }
+    let e = v.log10().floor();
+    if (-3.0..=4.0).contains(&e) {
+        let digits = (1.0 - e).max(0.0) as usize;
+        format!("{v:.digits$}")
+    } else {
+        format!("{v:.1e}")
+    }
 }
 
 /// An axis label for a whole number, none between two (`3` for 3.0, empty for 2.5).
@@ -442,20 +494,35 @@ fn draw<DB: DrawingBackend>(
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let x_range = linear_range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
     let y_values = || series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
+    // Room above the data for the legend when every corner would cover some of it.
+    let (_, covered, height) = legend_place(series, options.log_y);
+    let headroom = if covered > 0 && !series.is_empty() {
+        height / (1.0 - height)
+    } else {
+        0.0
+    };
+    let width = root.dim_in_pixel().0.saturating_sub(32 * px);
+    let title = caption_size(root, caption, 24 * px, width, px);
     let mut builder = ChartBuilder::on(root);
     builder
-        .caption(caption, (FONT_FAMILY, 24 * px))
+        .caption(caption, (FONT_FAMILY, title))
         .margin(16 * px)
         .x_label_area_size(48 * px)
         .y_label_area_size(80 * px);
     if options.log_y {
+        let r = log_range(y_values());
+        let top = r.end * (r.end / r.start).powf(headroom);
+        let top = if top.is_finite() { top } else { r.end };
         let chart = builder
-            .build_cartesian_2d(x_range, log_range(y_values()).log_scale())
+            .build_cartesian_2d(x_range, (r.start..top).log_scale())
             .map_err(|e| e.to_string())?;
         fill_chart(chart, options, series, px)
     } else {
+        let r = linear_range(y_values());
+        let top = r.end + headroom * (r.end - r.start);
+        let top = if top.is_finite() { top } else { r.end };
         let chart = builder
-            .build_cartesian_2d(x_range, linear_range(y_values()))
+            .build_cartesian_2d(x_range, r.start..top)
             .map_err(|e| e.to_string())?;
         fill_chart(chart, options, series, px)
     }
@@ -481,6 +548,10 @@ where
             .x_label_formatter(&integer_label);
     }
     let (d, t) = (px as i32, px);
+    if options.log_y {
+        // Enough labels that every decade in view, and the values between, are named.
+        mesh.y_labels(16).y_label_formatter(&log_label);
+    }
     mesh.x_desc(options.x_label.as_str())
         .y_desc(options.y_label.as_str())
         .label_style((FONT_FAMILY, 14 * t))
@@ -497,7 +568,10 @@ where
         let has_line = matches!(s.style, SeriesStyle::Line | SeriesStyle::LinePoints);
         let has_markers = matches!(s.style, SeriesStyle::Points | SeriesStyle::LinePoints);
         if has_line {
-            let style = color.stroke_width(2 * t);
+            // Earlier series are drawn wider, so a later curve on top of one (the MSM's
+            // total energy on the D-NURBS') leaves it visible on both sides.
+            let wide = if k + 1 < series.len() { 4 } else { 2 };
+            let style = color.stroke_width(wide * t);
             let anno = if px > 1 {
                 // At raster scale a thick line is filled as a polygon whose cost grows with its
                 // bounding box times its vertex count: short overlapping pieces of the path
@@ -560,7 +634,11 @@ where
             .margin(5 * t)
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK.stroke_width(t))
-            .position(legend_corner(series, options.log_y))
+            .position(match legend_place(series, options.log_y) {
+                // `draw` left room above the data for the legend.
+                (_, covered, _) if covered > 0 => SeriesLabelPosition::UpperRight,
+                (corner, _, _) => corner,
+            })
             .draw()
             .map_err(|e| e.to_string())?;
     }

@@ -19,15 +19,32 @@ pub enum MsmError {
         /// Second node.
         b: usize,
     },
-    /// A spring naming a node that does not exist.
-    #[error("spring {spring} names node {node}, but the lattice has {n_nodes} nodes")]
+    /// A spring, linear element or probe naming a node that does not exist.
+    #[error("{of} {index} names node {node}, but the lattice has {n_nodes} nodes")]
     MissingNode {
-        /// Spring index.
-        spring: usize,
+        /// What names it: `"spring"`, `"linear element"` or `"probe"` (`probe_nodes`).
+        of: &'static str,
+        /// Its index.
+        index: usize,
         /// The node named.
         node: usize,
         /// Number of nodes.
         n_nodes: usize,
+    },
+    /// A spring of an msm.json joining the same two nodes as an earlier one, of the same kind
+    /// and rest length: one spring of the summed constant is the same model.
+    #[error(
+        "spring {spring} joins nodes {a} and {b} like spring {first} (same kind and rest length): merge them into one spring of k = the sum of their constants"
+    )]
+    DuplicateSpring {
+        /// The later spring.
+        spring: usize,
+        /// The earlier one.
+        first: usize,
+        /// Its nodes.
+        a: usize,
+        /// Its nodes.
+        b: usize,
     },
     /// A node mass that is zero or negative.
     #[error("node {node} has mass {mass}; masses must be positive")]

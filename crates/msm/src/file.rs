@@ -7,12 +7,13 @@
 //!  "springs": [{"a": 0, "b": 1, "kind": "structural", "k": 1, "rest_length": 0.5}, …],
 //!  "gravity": [0, 0, -9.81], "grid": [n_u, n_v],
 //!  "scene": "examples/paper.toml", "initial_velocities": [[0, 0, 0], …],
-//!  "simulation": {"dt": 0.08, "t_end": 4, "integrator": "newmark"}}
+//!  "simulation": {"dt": 0.08, "t_end": 4, "integrator": "newmark"}, "probe_nodes": [12, 3]}
 //! ```
 //! `fixed`, `damping`, `uv`, `gravity` and `grid` may be left out (false, 0, none, zero, none);
 //! a spring's `kind` defaults to `"structural"` and its `rest_length` to its initial length.
 //! `scene` (where the model came from), `initial_velocities` (one per node; zero when left
-//! out; ignored at fixed nodes) and `simulation` are optional. Unknown keys are refused.
+//! out; ignored at fixed nodes), `simulation` and `probe_nodes` (the nodes `simulate` records;
+//! the node nearest the centre when left out) are optional. Unknown keys are refused.
 
 use nurbspring_sim::IntegratorKind;
 use serde::{Deserialize, Serialize};
@@ -123,6 +124,11 @@ pub struct MsmFile {
     /// How to run it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simulation: Option<FileSimulation>,
+    /// The nodes whose motion `simulate` records (`trajectory.csv`'s probes, in order): for a
+    /// derived model the node nearest each of the scene's probes, the centre first. Left out:
+    /// the node nearest the centre of the nodes' parameters.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub probe_nodes: Option<Vec<usize>>,
 }
 
 impl MsmFile {
@@ -206,6 +212,7 @@ impl SpringLattice {
             scene: None,
             initial_velocities: None,
             simulation: None,
+            probe_nodes: None,
         }
     }
 
@@ -245,11 +252,30 @@ impl SpringLattice {
             }
         };
         let mut springs = Vec::with_capacity(file.springs.len());
+        // (nodes, kind, rest length) → the first spring with them.
+        let mut seen: std::collections::HashMap<(usize, usize, SpringKind, Option<u64>), usize> =
+            std::collections::HashMap::with_capacity(file.springs.len());
         for (i, s) in file.springs.iter().enumerate() {
+            let key = (
+                s.a.min(s.b),
+                s.a.max(s.b),
+                s.kind,
+                s.rest_length.map(f64::to_bits),
+            );
+            if let Some(&first) = seen.get(&key) {
+                return Err(MsmError::DuplicateSpring {
+                    spring: i,
+                    first,
+                    a: s.a,
+                    b: s.b,
+                });
+            }
+            seen.insert(key, i);
             for node in [s.a, s.b] {
                 if node >= n {
                     return Err(MsmError::MissingNode {
-                        spring: i,
+                        of: "spring",
+                        index: i,
                         node,
                         n_nodes: n,
                     });

@@ -427,7 +427,8 @@ impl SpringLattice {
             for node in [spring.a, spring.b] {
                 if node >= n {
                     return Err(MsmError::MissingNode {
-                        spring: s,
+                        of: "spring",
+                        index: s,
                         node,
                         n_nodes: n,
                     });
@@ -487,7 +488,8 @@ impl SpringLattice {
             for (i, &a) in el.nodes.iter().enumerate() {
                 if a >= n {
                     return Err(MsmError::MissingNode {
-                        spring: e,
+                        of: "linear element",
+                        index: e,
                         node: a,
                         n_nodes: n,
                     });

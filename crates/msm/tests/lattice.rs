@@ -273,7 +273,8 @@ fn validation_errors() {
     assert!(matches!(
         two_nodes(Spring { b: 5, ..ok }),
         Err(MsmError::MissingNode {
-            spring: 0,
+            of: "spring",
+            index: 0,
             node: 5,
             n_nodes: 2
         })
@@ -526,6 +527,7 @@ fn element_validation_errors() {
             ..ok
         }),
         Err(MsmError::MissingNode {
+            of: "linear element",
             node: 9,
             n_nodes: 9,
             ..

@@ -41,7 +41,9 @@ impl MsmOverrides {
     }
 }
 
-/// The spring classes of `[msm]` with their constants (the keys are the constants' symbols).
+/// The spring classes of `[msm]` with their constants (the keys are the constants' symbols);
+/// a constant the scene leaves out is [`PLACEHOLDER_K`] (a lattice whose constants a
+/// derivation fits; [`MsmSpec::missing`] says which).
 pub fn spring_constants(m: &MsmSpec) -> Constants {
     Constants::from_pairs(
         [
@@ -51,7 +53,7 @@ pub fn spring_constants(m: &MsmSpec) -> Constants {
         ]
         .into_iter()
         .filter(|&(_, on, _)| on)
-        .map(|(kind, _, k)| (Class::Spring(kind), k)),
+        .map(|(kind, _, k)| (Class::Spring(kind), k.unwrap_or(PLACEHOLDER_K))),
     )
 }
 
@@ -71,18 +73,21 @@ pub fn element_classes(m: &MsmSpec, method: Method, curve: bool) -> Constants {
     Constants::from_pairs(Class::linear(&kinds).into_iter().map(|c| (c, 1.0)))
 }
 
-/// `[msm]` as lattice options for `method` (fixed nodes by the automatic rule).
+/// `[msm]` as lattice options for `method` (fixed nodes by the automatic rule; a node mass
+/// left out is [`PLACEHOLDER_MASS`], the damping [`MsmSpec::node_damping`] of the mass).
 pub(crate) fn lattice_options(
     m: &MsmSpec,
+    material: &nurbspring_dnurbs::MaterialModel,
     gravity: [f64; 3],
     method: Method,
     curve: bool,
 ) -> LatticeOptions {
+    let mass = m.mass_or_placeholder();
     LatticeOptions {
         grid: parameter_grid(m, method),
         constants: element_classes(m, method, curve),
-        mass: m.mass,
-        damping: m.damping,
+        mass,
+        damping: m.node_damping(material, mass),
         pre_strain: m.pre_strain,
         fixed: FixedNodes::Auto,
         gravity,
@@ -142,18 +147,6 @@ impl Scene {
                 },
             )
         })
-    }
-
-    /// The error for a `[curve]` scene where `what` needs a surface.
-    pub(crate) fn needs_surface(&self, what: &str) -> Error {
-        self.model_error(
-            Some("curve"),
-            nurbspring_derive::DeriveError::InvalidOption {
-                name: "geometry",
-                value: "[curve]".to_string(),
-                reason: format!("{what} needs a [surface] scene"),
-            },
-        )
     }
 
     /// The surface or curve (validated when the scene was read).
@@ -304,12 +297,14 @@ impl Scene {
         overrides: &MsmOverrides,
     ) -> Result<LatticeOptions, Error> {
         let curve = !self.geometry.is_surface();
-        let mut options = lattice_options(&self.msm, self.loads.gravity, method, curve);
+        let mut options =
+            lattice_options(&self.msm, &self.material, self.loads.gravity, method, curve);
         for (class, k) in overrides.constants.iter() {
             options.constants.set(class, k);
         }
         if let Some(m) = overrides.mass {
             options.mass = m;
+            options.damping = self.msm.node_damping(&self.material, m);
         }
         if let MsmFixed::Nodes(list) = &self.msm.fixed {
             let geometry = self.build_geometry()?;
@@ -357,13 +352,22 @@ impl Scene {
                 nonnegative: fit.nonnegative,
                 method: fit.method,
                 mass: match fit.mass {
+                    // Validation refuses `fit.mass = "fixed"` without `msm.mass`.
                     MassMethod::EigenvalueScan => MassChoice::EigenvalueScan,
-                    MassMethod::Fixed => MassChoice::Fixed(self.msm.mass),
+                    MassMethod::Fixed => MassChoice::Fixed(self.msm.mass_or_placeholder()),
                 },
                 max_candidates: fit.max_candidates,
             },
             probes: self.probe_params()?,
-            given: (method == Method::Paper).then(|| (spring_constants(&self.msm), self.msm.mass)),
+            // The scene's own constants are evaluated beside the derived ones only when it
+            // gives every one of them (placeholders are no model).
+            given: match (method, self.msm.mass) {
+                (Method::Paper, Some(m)) if self.msm.missing().is_empty() => {
+                    Some((spring_constants(&self.msm), m))
+                }
+                _ => None,
+            },
+            node_damping: self.msm.damping,
         })
     }
 }

@@ -57,6 +57,17 @@ pub enum Error {
         /// The estimate against the limit.
         message: String,
     },
+    /// Keys a command needs that the scene leaves out (a model is never built from
+    /// placeholders): the keys, and what to do instead.
+    #[error("{}: {keys}: {message}", path.display())]
+    Missing {
+        /// The scene file.
+        path: PathBuf,
+        /// The keys, comma-separated (`msm.k_edge, msm.mass`).
+        keys: String,
+        /// Why they are needed and how to get them.
+        message: String,
+    },
     /// A geometry file (geomdl JSON, IGES, OBJ) that cannot be read or does not describe valid
     /// curves and surfaces; the message names the line where the format has lines.
     #[error("{}", exchange_message(path, source))]
@@ -94,6 +105,7 @@ impl Error {
             Error::Scene(_)
             | Error::Option { .. }
             | Error::Resources { .. }
+            | Error::Missing { .. }
             | Error::Exchange { .. } => ErrorKind::Input,
             Error::MsmFile { source, .. } => source.kind(),
             Error::Model { source, .. } => source.kind(),

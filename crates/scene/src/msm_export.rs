@@ -225,7 +225,7 @@ fn py_floats(v: &[f64]) -> String {
 
 /// The SOFA scene (SofaPython3 `createScene`) of an MSM, or why SOFA cannot hold it: a model
 /// whose only elastic forces are linear elements has nothing SOFA's springs can express.
-pub fn sofa_scene(setup: &MsmSetup, source: &str) -> Result<String, String> {
+pub fn sofa_scene(setup: &MsmSetup, source: &str, file_name: &str) -> Result<String, String> {
     let lattice = setup.model.lattice();
     if lattice.springs.is_empty() && !lattice.elements.is_empty() {
         return Err(format!(
@@ -252,7 +252,7 @@ pub fn sofa_scene(setup: &MsmSetup, source: &str) -> Result<String, String> {
         s,
         "\"\"\"SOFA scene of a nurbspring mass-spring model, written by `nurbspring export --format sofa`.\n\n\
          Source: {source}\n\
-         {} nodes ({} fixed), {} springs. Run it with `runSofa {{this file}}` (SOFA 24.06 or later\n\
+         {} nodes ({} fixed), {} springs. Run it with `runSofa {file_name}` (SOFA 24.06 or later\n\
          with SofaPython3) or load it from Python with `Sofa.Simulation`.",
         lattice.n_nodes(),
         fixed.len(),
@@ -368,7 +368,11 @@ def createScene(root):
 
 /// Writes the SOFA scene of an MSM (atomically); returns what SOFA could not hold, for a warning.
 pub fn write_msm_sofa(path: &Path, setup: &MsmSetup, source: &str) -> Result<Vec<String>, Error> {
-    let text = sofa_scene(setup, source).map_err(|message| {
+    let file_name = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    );
+    let text = sofa_scene(setup, source, &file_name).map_err(|message| {
         Error::option(
             "--format",
             "sofa",

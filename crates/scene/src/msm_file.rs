@@ -82,14 +82,40 @@ pub fn msm_setup_from_text(
         path: path.to_path_buf(),
         source: Box::new(source),
     };
-    let file = MsmFile::from_json_str(text).map_err(bad)?;
+    let file = MsmFile::from_json_str(text).map_err(|e| {
+        if is_reduction_file(text) {
+            return Error::Option {
+                name: path.display().to_string(),
+                value: "(reduction.json)".to_string(),
+                message: REDUCTION_FILE.to_string(),
+            };
+        }
+        bad(e)
+    })?;
     let mut lattice = SpringLattice::from_file(&file).map_err(bad)?;
     lattice.set_constants(&overrides.constants);
     if let Some(m) = overrides.mass {
         lattice.set_mass(m);
     }
     let velocities = file.velocities().map_err(bad)?;
-    let centre = lattice_centre(&lattice);
+    let probe_nodes = match &file.probe_nodes {
+        Some(nodes) if !nodes.is_empty() => {
+            if let Some((k, &a)) = nodes
+                .iter()
+                .enumerate()
+                .find(|&(_, &a)| a >= lattice.n_nodes())
+            {
+                return Err(bad(nurbspring_msm::MsmError::MissingNode {
+                    of: "probe",
+                    index: k,
+                    node: a,
+                    n_nodes: lattice.n_nodes(),
+                }));
+            }
+            nodes.clone()
+        }
+        _ => vec![lattice_centre(&lattice)],
+    };
     let model = MsmModel::new(lattice).map_err(bad)?;
     let initial = model.initial_state(&velocities);
     Ok(MsmSetup {
@@ -98,10 +124,29 @@ pub fn msm_setup_from_text(
         model,
         initial,
         run: file.simulation.clone().unwrap_or(DEFAULT_RUN),
-        probe_nodes: vec![centre],
+        probe_nodes,
         save_every: 1,
         vtk_every: None,
     })
+}
+
+/// Why `simulate` and `export` do not take a reduction.json, and what to do instead.
+pub const REDUCTION_FILE: &str = "this is the `reduction` derivation's reduction.json, the exact \
+     reduction of the D-NURBS onto the nodes (dense node-space matrices M_T, K_T: a linear model, \
+     not a mass-spring model), which `simulate --model msm` and `export --format sofa|npz` do \
+     not run. `derive` has already simulated it: its central_node.csv and report.json hold its \
+     run against the D-NURBS (the reference any MSM is judged against). For a model to simulate \
+     or export, derive an MSM: `nurbspring derive SCENE --out DIR` (modal) or `--derivation \
+     paper` (springs), and use DIR/msm.json";
+
+/// True when `text` is a reduction.json (`"kind": "…"` beside `"stiffness"` at the top level).
+fn is_reduction_file(text: &str) -> bool {
+    #[derive(serde::Deserialize)]
+    struct Probe {
+        kind: Option<serde::de::IgnoredAny>,
+        stiffness: Option<serde::de::IgnoredAny>,
+    }
+    serde_json::from_str::<Probe>(text).is_ok_and(|p| p.kind.is_some() && p.stiffness.is_some())
 }
 
 /// The node nearest the centre of the nodes' parameters (or of the grid, or of the nodes'
@@ -124,14 +169,78 @@ fn lattice_centre(lattice: &SpringLattice) -> usize {
 impl Scene {
     /// The scene's MSM: the lattice sampled from its surface (`[msm]` with `overrides`), its
     /// initial state mapped by Ω (paper eqs. (11), (18)), the scene's run settings.
+    ///
+    /// The lattice's constants and node mass are the scene's (`[msm]`) or the overrides': a
+    /// scene that leaves one out is refused ([`Scene::missing_msm_keys`]), since a lattice of
+    /// placeholder constants is no model of anything.
     pub fn msm_setup(&self, overrides: &MsmOverrides) -> Result<MsmSetup, Error> {
+        self.refuse_placeholders(overrides)?;
+        self.msm_setup_unchecked(overrides)
+    }
+
+    /// The keys of `[msm]` that neither the scene nor `overrides` gives for its own lattice
+    /// (`msm.k_edge`, `msm.k_diag`, `msm.k_bend` of the spring kinds it has, `msm.mass`).
+    pub fn missing_msm_keys(&self, overrides: &MsmOverrides) -> Vec<String> {
+        use nurbspring_msm::{Class, SpringKind};
+        let kinds = [SpringKind::Structural, SpringKind::Shear, SpringKind::Bend];
+        let mut out: Vec<String> = self
+            .msm
+            .spring_keys()
+            .into_iter()
+            .zip(kinds)
+            .filter(|&((_, on, k), kind)| {
+                on && k.is_none() && !overrides.constants.contains(Class::Spring(kind))
+            })
+            .map(|((key, _, _), _)| format!("msm.{key}"))
+            .collect();
+        if self.msm.mass.is_none() && overrides.mass.is_none() {
+            out.push("msm.mass".to_string());
+        }
+        out
+    }
+
+    /// Refuses the scene's own lattice when `[msm]` (with `overrides`) leaves out a constant
+    /// or the node mass, naming the keys and the command that derives them.
+    pub fn refuse_placeholders(&self, overrides: &MsmOverrides) -> Result<(), Error> {
+        let missing = self.missing_msm_keys(overrides);
+        if missing.is_empty() {
+            return Ok(());
+        }
+        let flags: Vec<String> = missing
+            .iter()
+            .map(|k| format!("--{}", k.trim_start_matches("msm.").replace('_', "-")))
+            .collect();
+        Err(Error::Missing {
+            path: self.path.clone(),
+            keys: missing.join(", "),
+            message: format!(
+                "not given, so the scene has no mass-spring model of its own (nurbspring \
+                 writes none from placeholder constants). Derive one: `nurbspring derive {scene} \
+                 --out DIR` (the {method} derivation; `--derivation paper` for a lattice of \
+                 springs) writes DIR/msm.json, which `simulate DIR/msm.json --model msm` and \
+                 `export DIR/msm.json --format sofa|npz` take; or set {keys} in [msm] (or {flags})",
+                scene = self.path.display(),
+                method = self.derivation().0.name(),
+                keys = missing.join(", "),
+                flags = flags.join(", "),
+            ),
+        })
+    }
+
+    /// [`Scene::msm_setup`] without the refusal of placeholder constants (`check` describes
+    /// the lattice's shape with them).
+    pub(crate) fn msm_setup_unchecked(&self, overrides: &MsmOverrides) -> Result<MsmSetup, Error> {
         let model = self.build_dnurbs()?;
-        let Geometry::Surface(surface) = model.geometry() else {
-            return Err(self.needs_surface("the mass-spring model"));
-        };
         let options = self.lattice_options(Method::Paper, overrides)?;
-        let lattice = SpringLattice::from_surface(surface, &options, model.fixed_points())
-            .map_err(|e| self.model_error(Some("msm"), e))?;
+        let lattice = match model.geometry() {
+            Geometry::Surface(surface) => {
+                SpringLattice::from_surface(surface, &options, model.fixed_points())
+            }
+            Geometry::Curve(curve) => {
+                SpringLattice::from_curve(curve, &options, model.fixed_points())
+            }
+        }
+        .map_err(|e| self.model_error(Some("msm"), e))?;
         let params = lattice.params.clone().unwrap_or_default();
         let omega = Omega::new(model.geometry(), &params, self.dnurbs.weights_as_dofs)
             .map_err(|e| self.model_error(None, e))?;
@@ -168,11 +277,13 @@ pub fn msm_file(
     scene_label: &str,
     initial_velocities: &[[f64; 3]],
     run: FileSimulation,
+    probe_nodes: &[usize],
 ) -> MsmFile {
     MsmFile {
         scene: Some(scene_label.to_string()),
         initial_velocities: Some(initial_velocities.to_vec()),
         simulation: Some(run),
+        probe_nodes: Some(probe_nodes.to_vec()),
         ..lattice.to_file()
     }
 }

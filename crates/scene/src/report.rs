@@ -243,6 +243,7 @@ pub fn derived_msm_file(scene_label: &str, scene: &Scene, d: &Derivation) -> Opt
             scene_label,
             &d.node_velocities,
             run_settings(scene, d),
+            &d.probe_nodes,
         )
     })
 }
@@ -271,6 +272,18 @@ pub fn write_derived_files(
     scene: &Scene,
     d: &Derivation,
 ) -> Result<(), Error> {
+    write_derived_files_with(out, scene_label, scene, d, &[])
+}
+
+/// [`write_derived_files`] with more curves on the central node's figure, `(legend, run)`
+/// (the paper job adds the default derivation's MSM).
+pub fn write_derived_files_with(
+    out: &Path,
+    scene_label: &str,
+    scene: &Scene,
+    d: &Derivation,
+    extra: &[(String, &Trajectory)],
+) -> Result<(), Error> {
     if let Some(lattice) = &d.lattice {
         let msm = derived_msm_file(scene_label, scene, d).expect("the derivation has a lattice");
         write_json(out.join("msm.json"), &msm)?;
@@ -283,8 +296,8 @@ pub fn write_derived_files(
             &reduction_file(scene_label, r, &d.node_velocities),
         )?;
     }
-    write_central_node(out, d)?;
-    write_plots(out, scene_label, d)
+    write_central_node(out, d, !scene.geometry.is_surface())?;
+    write_plots(out, scene_label, d, extra)
 }
 
 /// The reports of [`write_derivation`]: `report.json` and `report.md` (with the paper's
@@ -307,7 +320,7 @@ pub fn write_reports(
 }
 
 /// `central_node.csv`: t, then the D-NURBS point and the MSM node, x, y, z.
-fn write_central_node(out: &Path, d: &Derivation) -> Result<(), Error> {
+fn write_central_node(out: &Path, d: &Derivation, curve: bool) -> Result<(), Error> {
     let t = &d.dnurbs_trajectory.t;
     let (a, b) = (&d.dnurbs_trajectory.probes[0], &d.msm_trajectory.probes[0]);
     let rows = (0..t.len().min(a.len()).min(b.len())).map(|s| {
@@ -316,13 +329,18 @@ fn write_central_node(out: &Path, d: &Derivation) -> Result<(), Error> {
         row.extend_from_slice(&b[s]);
         row
     });
-    write_csv(
-        out.join("central_node.csv"),
-        &[
-            "t", "dnurbs_x", "dnurbs_y", "dnurbs_z", "msm_x", "msm_y", "msm_z",
-        ],
-        rows,
-    )?;
+    // Where both are watched: the D-NURBS at the central node's own parameters.
+    let uv = d.probes.first().copied();
+    let at = crate::run::probe_label(None, uv, curve);
+    let node = crate::run::probe_label(d.probe_nodes.first().copied(), uv, curve);
+    let mut header = vec!["t".to_string()];
+    for (name, label) in [("dnurbs", &at), ("msm", &node)] {
+        for c in ["x", "y", "z"] {
+            header.push(format!("{name}_{c}[{label}]"));
+        }
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    write_csv(out.join("central_node.csv"), &header, rows)?;
     Ok(())
 }
 
@@ -382,13 +400,48 @@ fn energy_series(name: &str, traj: &Trajectory) -> Vec<Series> {
     ]
 }
 
+/// How a parameter set's validation run was made, as the figures say it: the integrator, its
+/// substeps when an explicit scheme was kept below its stability limit, and what plain steps
+/// did (`symplectic-euler in 3 substeps of dt/3 (plain steps diverge)`).
+pub fn how_run(p: &nurbspring_derive::ParameterSet) -> String {
+    let v = &p.validation;
+    let mut s = if v.substeps > 1 {
+        format!(
+            "{} in {} substeps of dt/{}",
+            v.integrator, v.substeps, v.substeps
+        )
+    } else {
+        v.integrator.clone()
+    };
+    if let Some(plain) = &p.explicit_run {
+        if plain.relative_rms.is_finite() {
+            s.push_str(&format!(
+                " (plain steps: rel. RMS {:.3})",
+                plain.relative_rms
+            ));
+        } else {
+            s.push_str(" (plain steps diverge)");
+        }
+    }
+    s.push_str(&format!(", rel. RMS {:.3}", v.relative_rms));
+    s
+}
+
 /// One plot file to write.
 type PlotJob<'a> = Box<dyn Fn() -> Result<(), Error> + Send + Sync + 'a>;
+
+/// The spectrum figure shows at most this many modes (the count is in its title).
+const SPECTRUM_SHOWN: usize = 50;
 
 /// central_node, mass_scan, energy and spectrum plots, SVG and PNG. The eight files are
 /// independent, so they are drawn in parallel (rayon's pool); the first error in the order
 /// above is returned.
-fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Error> {
+fn write_plots(
+    out: &Path,
+    scene_label: &str,
+    d: &Derivation,
+    extra: &[(String, &Trajectory)],
+) -> Result<(), Error> {
     use rayon::prelude::*;
     let axis = main_axis(&d.dnurbs_trajectory);
     let name = ["x", "y", "z"][axis];
@@ -397,9 +450,9 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
         Series::line("D-NURBS", xy(t, &d.dnurbs_trajectory.component(0, axis))),
         Series::line(
             format!(
-                "derived MSM, {} ({})",
+                "MSM of the {} derivation: {}",
                 d.method.name(),
-                d.derived.validation.integrator
+                how_run(&d.derived)
             ),
             xy(&d.msm_trajectory.t, &d.msm_trajectory.component(0, axis)),
         ),
@@ -408,14 +461,20 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
         let k = |class| g.constants.value(class);
         central.push(Series::line(
             format!(
-                "scene's MSM k_edge={}, k_diag={}, k_bend={}, m={} ({})",
+                "scene's MSM k_edge={}, k_diag={}, k_bend={}, m={}: {}",
                 k(Class::Spring(SpringKind::Structural)),
                 k(Class::Spring(SpringKind::Shear)),
                 k(Class::Spring(SpringKind::Bend)),
                 g.m,
-                g.validation.integrator
+                how_run(g)
             ),
             xy(&gt.t, &gt.component(0, axis)),
+        ));
+    }
+    for (name, run) in extra {
+        central.push(Series::line(
+            name.clone(),
+            xy(&run.t, &run.component(0, axis)),
         ));
     }
     let central_title = format!("Central node {name}(t) of {scene_label}: D-NURBS vs MSM");
@@ -436,7 +495,7 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
     }
     let energy: Vec<Series> = [
         ("D-NURBS", &d.dnurbs_trajectory),
-        ("derived MSM", &d.msm_trajectory),
+        ("MSM", &d.msm_trajectory),
     ]
     .into_iter()
     .filter(|(_, t)| !t.energy.is_empty())
@@ -444,9 +503,17 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
     .collect();
     let energy_title =
         format!("Energy over time, {scene_label}, each model relative to its own scale");
-    let spectrum_title = format!(
-        "Angular frequencies of {scene_label}: D-NURBS vs derived MSM (linearized at rest)"
-    );
+    let modes = d.spectrum.dnurbs.len().max(d.spectrum.msm.len());
+    let spectrum_title = if modes > SPECTRUM_SHOWN {
+        format!(
+            "Lowest {SPECTRUM_SHOWN} of {modes} angular frequencies of {scene_label}: D-NURBS vs MSM (at rest)"
+        )
+    } else {
+        format!("Angular frequencies of {scene_label}: D-NURBS vs MSM (at rest)")
+    };
+    let shown = |v: &[f64]| v[..v.len().min(SPECTRUM_SHOWN)].to_vec();
+    let (spectrum_dnurbs, spectrum_msm) = (shown(&d.spectrum.dnurbs), shown(&d.spectrum.msm));
+    let msm_name = format!("MSM of the {} derivation", d.method.name());
 
     let mut jobs: Vec<PlotJob<'_>> = Vec::new();
     for ext in ["svg", "png"] {
@@ -494,16 +561,14 @@ fn write_plots(out: &Path, scene_label: &str, d: &Derivation) -> Result<(), Erro
     }
     if !d.spectrum.dnurbs.is_empty() {
         for ext in ["svg", "png"] {
-            let spectrum_title = &spectrum_title;
+            let (spectrum_title, spectrum_dnurbs, spectrum_msm, msm_name) =
+                (&spectrum_title, &spectrum_dnurbs, &spectrum_msm, &msm_name);
             jobs.push(Box::new(move || {
                 plot_spectrum(
                     out.join(format!("spectrum.{ext}")),
                     spectrum_title,
                     "omega [rad/s]",
-                    &[
-                        ("D-NURBS", &d.spectrum.dnurbs),
-                        ("derived MSM", &d.spectrum.msm),
-                    ],
+                    &[("D-NURBS", &spectrum_dnurbs), (&msm_name, &spectrum_msm)],
                 )?;
                 Ok(())
             }));

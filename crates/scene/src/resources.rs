@@ -74,6 +74,11 @@ pub struct Limits {
     pub memory: u64,
     /// Bytes written, in all.
     pub output: u64,
+    /// The address space this process may still map under its `RLIMIT_AS` (`ulimit -v`),
+    /// when it has one ([`address_space_left`]): no `--max-memory` raises the memory limit
+    /// above it, since an allocation beyond it fails (and Rust ends the process on a failed
+    /// allocation).
+    pub address_space: Option<u64>,
 }
 
 /// Default output limit: 16 GiB (and never more than the free space of the output's file
@@ -91,10 +96,55 @@ impl Limits {
     /// The defaults on this machine: 80 % of the memory available to the process (the smaller
     /// of `MemAvailable` and the cgroup's limit), [`DEFAULT_MAX_OUTPUT`].
     pub fn from_system() -> Limits {
+        let address_space = address_space_left();
+        let memory = (available_memory() as f64 * 0.8) as u64;
         Limits {
-            memory: (available_memory() as f64 * 0.8) as u64,
+            memory: address_space.map_or(memory, |left| memory.min(left)),
             output: DEFAULT_MAX_OUTPUT,
+            address_space,
         }
+    }
+
+    /// The memory limit after `--max-memory` (never above the address space left).
+    pub fn with_memory(self, bytes: u64) -> Limits {
+        Limits {
+            memory: self.address_space.map_or(bytes, |left| bytes.min(left)),
+            ..self
+        }
+    }
+}
+
+/// Address space a worker thread reserves besides what it allocates: its malloc arena (glibc
+/// reserves 64 MiB of address space per arena on 64-bit systems) and its stack (2 MiB for
+/// Rust's threads), rounded up.
+const THREAD_RESERVE: u64 = 72 << 20;
+
+/// The address space this process may still map under its soft `RLIMIT_AS` (`ulimit -v`;
+/// read with `getrlimit`), less what it maps now (`VmSize` of /proc/self/status) and the
+/// reservations of its worker threads ([`THREAD_RESERVE`] each, for the pool's threads and
+/// one more); `None` without a limit.
+pub fn address_space_left() -> Option<u64> {
+    #[cfg(unix)]
+    {
+        let limit = rustix::process::getrlimit(rustix::process::Resource::As).current?;
+        let mapped = std::fs::read_to_string("/proc/self/status")
+            .ok()
+            .and_then(|t| {
+                t.lines()
+                    .find(|l| l.starts_with("VmSize:"))
+                    .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+            })
+            .map_or(0, |kib| kib * 1024);
+        let threads = rayon::current_num_threads() as u64 + 1;
+        Some(
+            limit
+                .saturating_sub(mapped)
+                .saturating_sub(threads.saturating_mul(THREAD_RESERVE)),
+        )
+    }
+    #[cfg(not(unix))]
+    {
+        None
     }
 }
 
@@ -402,12 +452,20 @@ impl Scene {
             return Err(Error::Resources {
                 path: self.path.clone(),
                 key: e.size_key.to_string(),
-                message: format!(
-                    "this model needs an estimated {} of memory ({}), above the limit of {} (raise it with --max-memory, or use a smaller model)",
-                    format_bytes(e.memory),
-                    parts.join(", "),
-                    format_bytes(limits.memory)
-                ),
+                message: match limits.address_space {
+                    Some(left) if left <= limits.memory => format!(
+                        "this model needs an estimated {} of memory ({}), above the {} of address space this process may still map under its limit (ulimit -v, RLIMIT_AS): raise that limit or use a smaller model",
+                        format_bytes(e.memory),
+                        parts.join(", "),
+                        format_bytes(left)
+                    ),
+                    _ => format!(
+                        "this model needs an estimated {} of memory ({}), above the limit of {} (raise it with --max-memory, or use a smaller model)",
+                        format_bytes(e.memory),
+                        parts.join(", "),
+                        format_bytes(limits.memory)
+                    ),
+                },
             });
         }
         if e.too_many_steps {

@@ -68,6 +68,41 @@ pub struct Simulated {
     pub warnings: Vec<String>,
     /// An MSM's explicit stability limit at its initial state.
     pub stability: Option<StabilityLimit>,
+    /// Where each probe is, as `trajectory.csv`'s header says it: `u=0.5;v=0.5` (a D-NURBS
+    /// probe, at the scene's parameters), `node=12;u=0.5;v=0.5` (an MSM's probe node, at the
+    /// node's own parameters), `node=12` (a node without parameters).
+    pub probe_labels: Vec<String>,
+}
+
+/// The label of a probe at `(u, v)` (`v` left out on a curve, `node` for an MSM's node).
+pub fn probe_label(node: Option<usize>, uv: Option<(f64, f64)>, curve: bool) -> String {
+    let mut parts = Vec::new();
+    if let Some(a) = node {
+        parts.push(format!("node={a}"));
+    }
+    if let Some((u, v)) = uv {
+        parts.push(format!("u={u}"));
+        if !curve {
+            parts.push(format!("v={v}"));
+        }
+    }
+    parts.join(";")
+}
+
+/// The columns of `trajectory.csv`: `t`, then `probeP_c[LABEL]` for each probe `P` and
+/// coordinate `c` (the label says where the probe is, [`Simulated::probe_labels`]).
+pub fn trajectory_header(labels: &[String]) -> Vec<String> {
+    let mut header = vec!["t".to_string()];
+    for (p, label) in labels.iter().enumerate() {
+        for c in ["x", "y", "z"] {
+            if label.is_empty() {
+                header.push(format!("probe{p}_{c}"));
+            } else {
+                header.push(format!("probe{p}_{c}[{label}]"));
+            }
+        }
+    }
+    header
 }
 
 /// Where a value of a run came from: a key of the scene or file, or an option.
@@ -208,9 +243,10 @@ pub fn simulate_dnurbs(
             reason,
         ));
     }
+    let probe_params = scene.probe_params()?;
     let probes = Omega::new(
         model.geometry(),
-        &scene.probe_params()?,
+        &probe_params,
         scene.dnurbs.weights_as_dofs,
     )
     .map_err(|e| Error::model(&scene.path, Some("simulation.probes"), e))?;
@@ -260,6 +296,10 @@ pub fn simulate_dnurbs(
         result,
     )?;
     simulated.warnings = model.quadrature().warning().into_iter().collect();
+    simulated.probe_labels = probe_params
+        .iter()
+        .map(|&uv| probe_label(None, Some(uv), curve))
+        .collect();
     Ok((simulated, outcome))
 }
 
@@ -343,6 +383,12 @@ pub fn simulate_msm(
     )?;
     simulated.stability = Some(stability);
     simulated.warnings = warnings;
+    let curve = lattice.grid.is_some_and(|(_, n_v)| n_v == 1);
+    simulated.probe_labels = setup
+        .probe_nodes
+        .iter()
+        .map(|&a| probe_label(Some(a), lattice.params.as_ref().map(|p| p[a]), curve))
+        .collect();
     Ok((simulated, outcome))
 }
 
@@ -421,6 +467,7 @@ fn finish(
             control_net_frames: frames.control_net_written,
             warnings: Vec::new(),
             stability: None,
+            probe_labels: Vec::new(),
         },
         outcome,
     ))
@@ -435,12 +482,9 @@ pub const ENERGY_COLUMNS: [&str; 5] = ["t", "kinetic", "elastic", "external", "t
 /// D-NURBS, `control_net.pvd`.
 pub fn write_run(out: &Path, run: &Simulated) -> Result<(), Error> {
     let traj = &run.trajectory;
-    let mut header = vec!["t".to_string()];
-    for p in 0..traj.probes.len() {
-        for c in ["x", "y", "z"] {
-            header.push(format!("probe{p}_{c}"));
-        }
-    }
+    let mut labels = run.probe_labels.clone();
+    labels.resize(traj.probes.len(), String::new());
+    let header = trajectory_header(&labels);
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
     let rows = (0..traj.t.len()).map(|s| {
         let mut row = vec![traj.t[s]];

@@ -194,9 +194,10 @@ impl CurveSpec {
 
 /// Reads a text file of at most `limit` bytes through its handle: regular files only, at most
 /// `limit + 1` bytes read, UTF-8 required. `what` names the file in messages ("scene").
-pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, SceneError> {
+pub(crate) fn read_text(path: &Path, limit: u64, what: &'static str) -> Result<String, SceneError> {
     let io = |source| SceneError::Io {
         path: path.to_path_buf(),
+        what,
         source,
     };
     let invalid = |value: String, message: String| SceneError::Invalid {

@@ -55,10 +55,12 @@ impl fmt::Display for Problem {
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The file could not be read.
-    #[error("{}: cannot read the scene file: {source}", path.display())]
+    #[error("{}: cannot read the {what} file: {source}", path.display())]
     Io {
-        /// The scene file.
+        /// The file.
         path: PathBuf,
+        /// What it was read as: `"scene"` or `"msm.json"`.
+        what: &'static str,
         /// The operating system's error.
         #[source]
         source: std::io::Error,

@@ -382,16 +382,23 @@ pub struct MsmSpec {
     pub shear: bool,
     /// Springs to the second neighbour along each grid line.
     pub bending: bool,
-    /// Structural spring constant (≥ 0).
-    pub k_edge: f64,
-    /// Shear spring constant (≥ 0).
-    pub k_diag: f64,
-    /// Bending spring constant (≥ 0).
-    pub k_bend: f64,
-    /// Mass of every node (> 0).
-    pub mass: f64,
-    /// Damping coefficient per node (≥ 0).
-    pub damping: f64,
+    /// Structural spring constant (≥ 0); `None` when the scene gives none (a derivation fits
+    /// it; `simulate` and `export` of the scene's own lattice refuse, [`MsmSpec::missing`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k_edge: Option<f64>,
+    /// Shear spring constant (≥ 0); `None` when not given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k_diag: Option<f64>,
+    /// Bending spring constant (≥ 0); `None` when not given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k_bend: Option<f64>,
+    /// Mass of every node (> 0); `None` when not given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    /// Damping coefficient per node (≥ 0); `None` when not given: the D-NURBS's damping per
+    /// unit mass, `γ/μ` times the node's mass ([`MsmSpec::node_damping`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
     /// Rest length = (1 − pre_strain) × initial length; in (−1, 1).
     pub pre_strain: f64,
     /// Fixed nodes: `"auto"` (docs/math.md §5 rule; on the Greville grid a node is fixed iff
@@ -403,7 +410,54 @@ pub struct MsmSpec {
     pub elements: Option<Vec<LinearKind>>,
 }
 
+/// Spring constant of a spring kind `[msm]` turns on without giving its constant, where a
+/// lattice is built before its constants are fitted (the fit replaces it).
+pub const PLACEHOLDER_K: f64 = 1.0;
+
+/// Node mass of a lattice built before its mass is chosen (the derivation replaces it).
+pub const PLACEHOLDER_MASS: f64 = 1.0;
+
 impl MsmSpec {
+    /// The constant of each spring kind the lattice has (`structural`, `shear`, `bending`),
+    /// with its key: `(key, kind on, given value)`.
+    pub fn spring_keys(&self) -> [(&'static str, bool, Option<f64>); 3] {
+        [
+            ("k_edge", self.structural, self.k_edge),
+            ("k_diag", self.shear, self.k_diag),
+            ("k_bend", self.bending, self.k_bend),
+        ]
+    }
+
+    /// The keys of the scene's own lattice that `[msm]` leaves out (`msm.k_edge`, …,
+    /// `msm.mass`): the spring constants of the kinds it turns on and the node mass. A lattice
+    /// missing any of them is not a model (`simulate --model msm` and `export --format
+    /// sofa|npz` of the scene refuse it; a derivation fits them).
+    pub fn missing(&self) -> Vec<&'static str> {
+        let mut out: Vec<&'static str> = self
+            .spring_keys()
+            .into_iter()
+            .filter(|&(_, on, k)| on && k.is_none())
+            .map(|(key, _, _)| key)
+            .collect();
+        if self.mass.is_none() {
+            out.push("mass");
+        }
+        out
+    }
+
+    /// The node mass, or [`PLACEHOLDER_MASS`] when not given.
+    pub fn mass_or_placeholder(&self) -> f64 {
+        self.mass.unwrap_or(PLACEHOLDER_MASS)
+    }
+
+    /// The damping coefficient of a node of mass `m`: `msm.damping` when given, else the
+    /// D-NURBS's damping per unit mass `γ/μ` times `m` (its damping matrix is `D = (γ/μ) M`,
+    /// docs/math.md §3), so a lattice always carries the material's damping.
+    pub fn node_damping(&self, material: &MaterialModel, m: f64) -> f64 {
+        self.damping
+            .unwrap_or_else(|| material.damping_per_mass() * m)
+    }
+
     /// The grid a derivation uses: the scene's, else the distinct knots for the paper's and
     /// the Greville abscissae for the others.
     pub fn grid_for(&self, method: Method) -> LatticeGrid {
@@ -423,11 +477,11 @@ impl Default for MsmSpec {
             structural: true,
             shear: true,
             bending: false,
-            k_edge: 1.0,
-            k_diag: 1.0,
-            k_bend: 1.0,
-            mass: 1.0,
-            damping: 0.0,
+            k_edge: None,
+            k_diag: None,
+            k_bend: None,
+            mass: None,
+            damping: None,
             pre_strain: 0.0,
             fixed: MsmFixed::Auto,
             elements: None,
@@ -446,6 +500,17 @@ pub enum LatticeGrid {
     Uniform,
     /// The Greville abscissae (one node per control point).
     Greville,
+}
+
+impl LatticeGrid {
+    /// `"knots"`, `"uniform"` or `"greville"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LatticeGrid::Knots => "knots",
+            LatticeGrid::Uniform => "uniform",
+            LatticeGrid::Greville => "greville",
+        }
+    }
 }
 
 /// Which lattice nodes are fixed.
@@ -586,6 +651,9 @@ impl OutputSpec {
 pub fn default_frame_every(samples: usize) -> usize {
     samples.div_ceil(DEFAULT_MAX_FRAMES).max(1)
 }
+
+/// Largest number of probes a scene may ask for (`simulation.probes`).
+pub const MAX_PROBES: usize = 1000;
 
 /// Largest number of control points, lattice nodes or array entries a scene may ask for
 /// (10⁷); larger requests are refused before anything is allocated.

@@ -62,16 +62,20 @@ pub struct SimulationSummary {
     /// End time.
     pub t_end: f64,
     /// Steps.
-    pub steps: f64,
+    pub steps: u64,
     /// D-NURBS integrator.
     pub dnurbs_integrator: IntegratorKind,
     /// MSM integrator.
     pub msm_integrator: IntegratorKind,
 }
 
-/// The MSM of a surface scene.
+/// The scene's own lattice of springs: what `simulate SCENE --model msm`, `stability` and
+/// `export SCENE --format sofa|npz` run (the `[msm]` section as written, on the knots unless
+/// `msm.grid` says otherwise), not the lattice a derivation makes ([`DeriveSummary`]).
 #[derive(Serialize)]
 pub struct MsmSummary {
+    /// Where its nodes sit: `"knots"`, `"uniform"` or `"greville"`.
+    pub lattice: &'static str,
     /// Nodes.
     pub nodes: usize,
     /// `[n_u, n_v]`.
@@ -82,15 +86,41 @@ pub struct MsmSummary {
     pub free_dofs: usize,
     /// Springs per class.
     pub springs: BTreeMap<String, usize>,
+    /// The keys of `[msm]` the scene leaves out (its spring constants, `msm.mass`): without
+    /// them the scene has no MSM of its own, and the stability fields below are absent.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub missing: Vec<String>,
     /// ω_max of the MSM at rest.
-    pub omega_max: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub omega_max: Option<f64>,
     /// 2/ω_max.
-    pub dt_critical: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_critical: Option<f64>,
     /// Whether the scene's Δt exceeds it.
-    pub dt_exceeds_explicit_limit: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_exceeds_explicit_limit: Option<bool>,
     /// How `simulate --model msm` runs the scene's integrator at its Δt: plain steps, substeps
     /// below the lattice's uniform stability limit, or Newmark ([`crate::run::explicit_schedule`]).
-    pub simulate: Schedule,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub simulate: Option<Schedule>,
+}
+
+/// The lattice `derive` makes for the scene's derivation (`fit.derivation`, default modal):
+/// nodes on the Greville abscissae (one per control point) unless `msm.grid` says otherwise,
+/// the paper's on the knots.
+#[derive(Serialize)]
+pub struct DeriveSummary {
+    /// The derivation `derive SCENE` runs.
+    pub derivation: &'static str,
+    /// Why it is not the one the scene names, when so.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<&'static str>,
+    /// Where its nodes sit: `"knots"`, `"uniform"` or `"greville"`.
+    pub lattice: &'static str,
+    /// Nodes.
+    pub nodes: usize,
+    /// `[n_u, n_v]` (`n_v = 1` on a curve).
+    pub grid: (usize, usize),
 }
 
 /// `check`'s report.
@@ -104,9 +134,10 @@ pub struct Summary {
     pub dnurbs: DnurbsSummary,
     /// Time settings.
     pub simulation: SimulationSummary,
-    /// The MSM (surfaces only).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub msm: Option<MsmSummary>,
+    /// The lattice `derive` makes.
+    pub derive: DeriveSummary,
+    /// The scene's own lattice of springs (`simulate --model msm`).
+    pub msm: MsmSummary,
     /// Warnings: a quadrature rule with a large estimated error, zero stiffness, unconstrained
     /// rigid motion, a time step above the explicit limit of the MSM integrator
     /// ([`scene_warnings`]).
@@ -137,38 +168,60 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
         },
     };
     let dof_map = model.dof_map();
-    let msm = match model.geometry() {
-        Geometry::Surface(_) => {
-            let setup = scene.msm_setup(&MsmOverrides::default())?;
-            let lattice = setup.model.lattice();
-            let stability = setup
+    let (derivation, note) = scene.derivation();
+    let grid = crate::build::parameter_grid(&scene.msm, derivation);
+    let derive = DeriveSummary {
+        derivation: derivation.name(),
+        note,
+        lattice: scene.msm.grid_for(derivation).name(),
+        nodes: 0,
+        grid: crate::build::lattice_shape(&grid, model.geometry())
+            .map_err(|e| Error::model(&scene.path, Some("msm.grid"), e))?,
+    };
+    let derive = DeriveSummary {
+        nodes: derive.grid.0 * derive.grid.1,
+        ..derive
+    };
+    let msm = {
+        let overrides = MsmOverrides::default();
+        let missing = scene.missing_msm_keys(&overrides);
+        let setup = scene.msm_setup_unchecked(&overrides)?;
+        let lattice = setup.model.lattice();
+        // The stability of placeholder constants would describe no model.
+        let stability = if missing.is_empty() {
+            let s = setup
                 .model
                 .stability()
                 .map_err(|e| Error::model(&scene.path, Some("msm"), e))?;
-            Some(MsmSummary {
-                nodes: lattice.n_nodes(),
-                grid: lattice.grid,
-                fixed_nodes: lattice.fixed.iter().filter(|&&f| f).count(),
-                free_dofs: setup.model.dof_map().n_free(),
-                springs: lattice
-                    .classes()
-                    .into_iter()
-                    .map(|c| (c.name().to_string(), lattice.count(c)))
-                    .collect(),
-                omega_max: stability.omega_max,
-                dt_critical: stability.dt_critical,
-                dt_exceeds_explicit_limit: time.dt >= stability.dt_critical,
-                simulate: Schedule::stable(
-                    &setup.model,
-                    setup.model.initial_positions(),
-                    time.msm_integrator,
-                    time.dt,
-                )
-                .map_err(|e| Error::model(&scene.path, Some("msm"), e))?
-                .0,
-            })
+            let schedule = Schedule::stable(
+                &setup.model,
+                setup.model.initial_positions(),
+                time.msm_integrator,
+                time.dt,
+            )
+            .map_err(|e| Error::model(&scene.path, Some("msm"), e))?
+            .0;
+            Some((s, schedule))
+        } else {
+            None
+        };
+        MsmSummary {
+            lattice: scene.msm.grid_for(nurbspring_derive::Method::Paper).name(),
+            nodes: lattice.n_nodes(),
+            grid: lattice.grid,
+            fixed_nodes: lattice.fixed.iter().filter(|&&f| f).count(),
+            free_dofs: setup.model.dof_map().n_free(),
+            springs: lattice
+                .classes()
+                .into_iter()
+                .map(|c| (c.name().to_string(), lattice.count(c)))
+                .collect(),
+            missing,
+            omega_max: stability.map(|(s, _)| s.omega_max),
+            dt_critical: stability.map(|(s, _)| s.dt_critical),
+            dt_exceeds_explicit_limit: stability.map(|(s, _)| time.dt >= s.dt_critical),
+            simulate: stability.map(|(_, schedule)| schedule),
         }
-        Geometry::Curve(_) => None,
     };
     Ok(Summary {
         scene: scene.path.display().to_string(),
@@ -189,7 +242,7 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
         simulation: SimulationSummary {
             dt: time.dt,
             t_end: time.t_end,
-            steps: (time.t_end / time.dt).ceil(),
+            steps: nurbspring_sim::step_count(0.0, time.t_end, time.dt) as u64,
             dnurbs_integrator: time.dnurbs_integrator,
             msm_integrator: time.msm_integrator,
         },
@@ -197,8 +250,9 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
             .quadrature()
             .warning()
             .into_iter()
-            .chain(scene_warnings(scene, &model, msm.as_ref()))
+            .chain(scene_warnings(scene, &model, Some(&msm)))
             .collect(),
+        derive,
         msm,
     })
 }
@@ -252,21 +306,22 @@ fn rigid_and_stability_warnings(
     }
     let time = scene.time_settings();
     if let Some(msm) = msm
-        && !msm.simulate.is_plain(time.msm_integrator)
+        && let (Some(schedule), Some(dt_critical)) = (msm.simulate, msm.dt_critical)
+        && !schedule.is_plain(time.msm_integrator)
     {
-        let how = if msm.simulate.integrator == time.msm_integrator {
+        let how = if schedule.integrator == time.msm_integrator {
             format!(
                 "runs it in {n} substeps of dt/{n} per step",
-                n = msm.simulate.substeps
+                n = schedule.substeps
             )
         } else {
-            format!("runs {} instead", msm.simulate.integrator)
+            format!("runs {} instead", schedule.integrator)
         };
         warnings.push(format!(
             "simulation.dt = {} is above the explicit limit of simulation.msm_integrator = {} \
              (dt_critical = {:.4e} s): `simulate --model msm` {how}; choose dt below \
              dt_critical or an implicit integrator",
-            time.dt, time.msm_integrator, msm.dt_critical,
+            time.dt, time.msm_integrator, dt_critical,
         ));
     }
 }

@@ -206,7 +206,21 @@ pub(crate) fn build_scene(
     let initial = initial_spec(raw.initial, &dnurbs, info.as_ref(), &mut p);
     check_simulation(&simulation, &material, &dnurbs, info.as_ref(), &mut p);
     let method = raw.fit.derivation_for(&dnurbs, &raw.constraints).0;
-    check_msm(&raw.msm, &raw.loads, method, info.as_ref(), &mut p);
+    check_msm(
+        &raw.msm,
+        &material,
+        &raw.loads,
+        method,
+        info.as_ref(),
+        &mut p,
+    );
+    if raw.fit.mass == MassMethod::Fixed && raw.msm.mass.is_none() {
+        p.push(
+            "msm.mass",
+            "(not given)",
+            "fit.mass = \"fixed\" uses msm.mass as the node mass: give it, or let the derivation choose the mass (fit.mass = \"eigenvalue-scan\")",
+        );
+    }
     if raw.output.vtk_every == Some(0) {
         p.push("output.vtk_every", "0", "must be at least 1");
     }
@@ -307,14 +321,37 @@ fn surface_spec(s: RawSurface, p: &mut Problems) -> Option<SurfaceSpec> {
         }
     }
     let n_u = s.control_points.len();
-    let n_v = s.control_points.first().map_or(0, Vec::len);
+    // The row length most rows have (ties: the one knots_v and degree_v imply, else row
+    // 0's), so that one short or long row is the one blamed.
+    let implied = s.knots_v.len().checked_sub(s.degree_v + 1);
+    let mut lengths: Vec<(usize, usize)> = Vec::new();
+    for row in &s.control_points {
+        match lengths.iter_mut().find(|(len, _)| *len == row.len()) {
+            Some((_, count)) => *count += 1,
+            None => lengths.push((row.len(), 1)),
+        }
+    }
+    let most = lengths.iter().map(|&(_, c)| c).max().unwrap_or(0);
+    let tied: Vec<usize> = lengths
+        .iter()
+        .filter(|&&(_, c)| c == most)
+        .map(|&(len, _)| len)
+        .collect();
+    let n_v = match implied {
+        Some(len) if tied.contains(&len) => len,
+        _ => tied.first().copied().unwrap_or(0),
+    };
+    let agreeing = lengths
+        .iter()
+        .find(|&&(len, _)| len == n_v)
+        .map_or(0, |&(_, c)| c);
     if n_u == 0 {
         p.push("surface.control_points", "[]", "no control points given");
     } else if n_v == 0 {
         p.push(
-            "surface.control_points[0]",
-            "[]",
-            "the first row of control points is empty",
+            "surface.control_points",
+            "[[], …]",
+            "the rows of control points are empty",
         );
     }
     if n_u.saturating_mul(n_v) > MAX_ITEMS {
@@ -331,7 +368,7 @@ fn surface_spec(s: RawSurface, p: &mut Problems) -> Option<SurfaceSpec> {
             p.push(
                 format!("surface.control_points[{i}]"),
                 format!("{} points", row.len()),
-                format!("every row must have {n_v} points, like row 0 (rows run along u, points in a row along v)"),
+                format!("every row must have {n_v} points, like {agreeing} of the {n_u} rows (rows run along u, points in a row along v)"),
             );
             continue;
         }
@@ -1135,11 +1172,13 @@ fn check_simulation(
             reason,
         );
     }
-    if s.probes.len() > MAX_ITEMS {
+    if s.probes.len() > MAX_PROBES {
         p.push(
             "simulation.probes",
             format!("{} probes", s.probes.len()),
-            format!("more than {MAX_ITEMS}"),
+            format!(
+                "more than {MAX_PROBES} (each is a column of trajectory.csv and a run of the validation; to follow the whole surface, read its ParaView frames)"
+            ),
         );
         return;
     }
@@ -1170,6 +1209,7 @@ fn time_problem(p: &mut Problems, key: &str, value: f64, what: &str) {
 
 fn check_msm(
     m: &MsmSpec,
+    material: &MaterialModel,
     loads: &LoadsSpec,
     method: Method,
     info: Option<&GeomInfo>,
@@ -1205,7 +1245,7 @@ fn check_msm(
     }
     // The spring keys are checked whatever the derivation: they also describe the lattice
     // `simulate --model msm` runs.
-    for e in build::lattice_options(m, loads.gravity, Method::Paper, curve).problems() {
+    for e in build::lattice_options(m, material, loads.gravity, Method::Paper, curve).problems() {
         match e {
             MsmError::InvalidOption { name, value, rule } => {
                 let key = match name.strip_prefix("gravity") {

@@ -161,6 +161,41 @@ fn damping_follows_the_dnurbs() {
     }
 }
 
+/// Every derivation carries the material's damping γ: the lattices' nodes `γ/μ` times their
+/// mass (the D-NURBS's `D = (γ/μ) M`), the reduction its ratio; a scene's own `msm.damping`
+/// is kept as given (the paper's derivation used to write node damping 0 for a damped cloth).
+#[test]
+fn every_derivation_carries_the_material_damping() {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/derivations/two_rings.toml"),
+    )
+    .unwrap()
+    .replace("mu = 2.0", "mu = 2.0\ngamma = 0.4");
+    let text = text.replace("t_end = 20.0", "t_end = 1.0");
+    let s = Scene::from_str(&text, "damped.toml").unwrap();
+    for method in Method::ALL {
+        let d = derive(&s, method);
+        match (&d.lattice, &d.reduction) {
+            (Some(l), _) => {
+                for (a, (m, c)) in l.masses.iter().zip(&l.damping).enumerate() {
+                    assert!(
+                        (c - 0.2 * m).abs() <= 1e-14 * m,
+                        "{}: node {a}: damping {c} for mass {m}",
+                        method.name()
+                    );
+                }
+                assert!(l.damping.iter().any(|&c| c > 0.0), "{}", method.name());
+            }
+            (None, Some(r)) => assert_eq!(r.damping_ratio, 0.2),
+            (None, None) => panic!("{}: no model", method.name()),
+        }
+    }
+    // The scene's own msm.damping is the lattice's (examples/sheet_gravity.toml keeps 0.01).
+    let given = Scene::from_str(&format!("{text}\n[msm]\ndamping = 0.05\n"), "given.toml").unwrap();
+    let d = derive(&given, Method::Paper);
+    assert!(d.lattice.unwrap().damping.iter().all(|&c| c == 0.05));
+}
+
 /// The paper's derivation keeps its constants; its validation is 3-D at the node's own point
 /// and its warnings say what is wrong.
 #[test]

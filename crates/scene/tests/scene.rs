@@ -80,7 +80,7 @@ fn paper_scene_is_read_as_in_spec() {
     );
     assert_eq!(
         (scene.msm.k_edge, scene.msm.k_diag, scene.msm.mass),
-        (2.7225, 0.8661, 0.005)
+        (Some(2.7225), Some(0.8661), Some(0.005))
     );
     assert_eq!(scene.msm.fixed, MsmFixed::Auto);
     assert_eq!(scene.dnurbs.quadrature_points, Some(4));
@@ -1000,11 +1000,11 @@ fn scene() -> impl Strategy<Value = Scene> {
                     structural: springs[0] || !(springs[1] || springs[2]),
                     shear: springs[1],
                     bending: springs[2],
-                    k_edge: k,
-                    k_diag: k / 3.0,
-                    k_bend: 0.0,
-                    mass,
-                    damping: 0.0,
+                    k_edge: Some(k),
+                    k_diag: Some(k / 3.0),
+                    k_bend: Some(0.0),
+                    mass: Some(mass),
+                    damping: Some(0.0),
                     pre_strain,
                     fixed: if nonneg {
                         MsmFixed::Auto

@@ -16,7 +16,7 @@ pub struct EvalArgs {
     /// Scene file (TOML) with a [surface] or [curve].
     scene: PathBuf,
     /// Parameter to evaluate at: `U,V` for a surface, `U` for a curve (repeatable).
-    #[arg(long = "at", value_name = "U,V")]
+    #[arg(long = "at", value_name = "U,V", allow_hyphen_values = true)]
     at: Vec<String>,
     /// Also print derivatives up to this order (0, 1 or 2).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=2))]

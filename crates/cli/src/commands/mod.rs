@@ -22,16 +22,16 @@ use nurbspring_sim::IntegratorKind;
 #[derive(Args, Debug, Default, Clone)]
 pub struct MsmFlags {
     /// Structural spring constant.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub k_edge: Option<f64>,
     /// Shear spring constant.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub k_diag: Option<f64>,
     /// Bending spring constant.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub k_bend: Option<f64>,
     /// Node mass.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub mass: Option<f64>,
 }
 

@@ -36,10 +36,10 @@ pub struct SimulateArgs {
     #[arg(long)]
     out: PathBuf,
     /// Time step [s] (default: the scene's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     dt: Option<f64>,
     /// End time [s] (default: the scene's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     t_end: Option<f64>,
     /// Integrator (default: the scene's). D-NURBS: terzopoulos-qin, newmark, modal; MSM:
     /// symplectic-euler, verlet, rk4, backward-euler, newmark, modal (linear MSMs). A scene's
