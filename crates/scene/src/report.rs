@@ -568,7 +568,7 @@ fn write_plots(
                     out.join(format!("spectrum.{ext}")),
                     spectrum_title,
                     "omega [rad/s]",
-                    &[("D-NURBS", &spectrum_dnurbs), (&msm_name, &spectrum_msm)],
+                    &[("D-NURBS", spectrum_dnurbs), (msm_name, spectrum_msm)],
                 )?;
                 Ok(())
             }));
