@@ -16,7 +16,9 @@ use nurbspring_derive::{Derivation, Method, Trajectory};
 use nurbspring_scene::export::DofsFile;
 use nurbspring_scene::msm_file::{MsmSetup, msm_setup_from_text, read_msm_file};
 use nurbspring_scene::report::{Report, derived_msm_file};
-use nurbspring_scene::run::{RunRequest, Simulated, simulate_dnurbs, simulate_msm};
+use nurbspring_scene::run::{
+    RunRequest, Simulated, SteadyRequest, simulate_dnurbs, simulate_msm, steady_state,
+};
 use nurbspring_scene::{Error, MsmOverrides};
 use nurbspring_sim::{ErrorKind, IntegratorKind};
 use pyo3::create_exception;
@@ -367,6 +369,42 @@ fn modes<'py>(py: Python<'py>, scene: &Scene, count: usize) -> PyResult<Bound<'p
     Ok(f64_bytes(py, omega))
 }
 
+/// The equilibrium under the scene's loads (`nurbspring steady`): `load_steps` recorded
+/// levels along the path (the shell's Newton path), the linearization at rest with `linear`.
+#[pyfunction]
+#[pyo3(signature = (scene, load_steps=1, linear=false, progress=false))]
+fn steady<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    load_steps: usize,
+    linear: bool,
+    progress: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let scene = &scene.inner;
+    let steady = run_blocking(py, |cancel| {
+        let request = SteadyRequest {
+            load_steps,
+            linear,
+            cancel: Some(cancel),
+        };
+        let mut bar = progress_printer(progress, "steady");
+        let mut on_level = |lambda: f64| bar((lambda * 100.0).round() as usize, 100);
+        steady_state(scene, &request, &mut on_level)
+    })?
+    .map_err(py_err)?;
+    let out = PyDict::new(py);
+    out.set_item("p", f64_bytes(py, steady.p.iter().copied()))?;
+    out.set_item("dofs_per_point", steady.model.matrices().dofs_per_point)?;
+    out.set_item("probes", json_text(&steady.probes)?)?;
+    out.set_item("path", json_text(&steady.path)?)?;
+    out.set_item("equations", steady.equations)?;
+    out.set_item("iterations", steady.iterations)?;
+    out.set_item("increments", steady.increments)?;
+    out.set_item("relative_residual", steady.residual)?;
+    out.set_item("warnings", steady.warnings.clone())?;
+    Ok(out)
+}
+
 /// A run's samples as a dict of buffers and values.
 fn run_dict<'py>(py: Python<'py>, run: &Simulated) -> PyResult<Bound<'py, PyDict>> {
     let traj: &Trajectory = &run.trajectory;
@@ -660,6 +698,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<MassSpring>()?;
     m.add_function(wrap_pyfunction!(matrices, m)?)?;
     m.add_function(wrap_pyfunction!(modes, m)?)?;
+    m.add_function(wrap_pyfunction!(steady, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_scene, m)?)?;
     m.add_function(wrap_pyfunction!(derive, m)?)?;
     m.add_function(wrap_pyfunction!(paper, m)?)?;

@@ -309,6 +309,26 @@ pub fn from_homogeneous(points: &[[f64; 4]]) -> (Vec<[f64; 3]>, Vec<f64>) {
         .unzip()
 }
 
+/// `P_new = C · P_old` for the Cartesian points and weights of a curve or surface. Equal
+/// weights `w` stay exactly `w` (the rows of C sum to one, so the homogeneous route would
+/// only add round-off to them and make a B-spline look rational): the points are then
+/// transformed directly.
+fn apply_to_net(
+    c: &RefinementMatrix,
+    points: &[[f64; 3]],
+    weights: &[f64],
+) -> (Vec<[f64; 3]>, Vec<f64>) {
+    let uniform = weights.iter().all(|&w| w == weights[0]);
+    if uniform && !weights.is_empty() {
+        let h: Vec<[f64; 4]> = points.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        let moved = c.apply(&h);
+        let points = moved.iter().map(|h| [h[0], h[1], h[2]]).collect();
+        (points, vec![weights[0]; moved.len()])
+    } else {
+        from_homogeneous(&c.apply(&to_homogeneous(points, weights)))
+    }
+}
+
 /// A sparse row vector (column, value), columns ascending: the "control point" the
 /// algorithms below operate on when they build a matrix.
 #[derive(Clone, Debug, Default)]
@@ -774,8 +794,7 @@ impl NurbsCurve {
         knots: KnotVector,
         c: RefinementMatrix,
     ) -> Result<(NurbsCurve, RefinementMatrix), GeomError> {
-        let h = c.apply(&to_homogeneous(self.control_points(), self.weights()));
-        let (points, weights) = from_homogeneous(&h);
+        let (points, weights) = apply_to_net(&c, self.control_points(), self.weights());
         Ok((NurbsCurve::try_new(knots, points, weights)?, c))
     }
 
@@ -845,8 +864,7 @@ impl NurbsSurface {
         c_v: &RefinementMatrix,
     ) -> Result<(NurbsSurface, RefinementMatrix), GeomError> {
         let c = c_u.kron(c_v);
-        let h = c.apply(&to_homogeneous(self.control_points(), self.weights()));
-        let (points, weights) = from_homogeneous(&h);
+        let (points, weights) = apply_to_net(&c, self.control_points(), self.weights());
         Ok((NurbsSurface::try_new(knots_u, knots_v, points, weights)?, c))
     }
 

@@ -123,6 +123,35 @@ pub struct DeriveSummary {
     pub grid: (usize, usize),
 }
 
+/// The material of a scene: its model, and for the shell the stiffnesses and mass per area it
+/// implies (docs/math.md §10.1).
+#[derive(Serialize)]
+pub struct MaterialSummary {
+    /// `"tension-plate"` or `"kirchhoff-love"`.
+    pub model: &'static str,
+    /// The shell's bending stiffness `D = E t³ / (12 (1 − ν²))` (force · length).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bending_stiffness: Option<f64>,
+    /// The shell's membrane stiffness `E t / (1 − ν²)` (force / length).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub membrane_stiffness: Option<f64>,
+    /// The shell's mass per area `ρ t`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mass_per_area: Option<f64>,
+}
+
+impl MaterialSummary {
+    fn of(material: &nurbspring_dnurbs::MaterialModel) -> Self {
+        let shell = material.shell();
+        Self {
+            model: material.name(),
+            bending_stiffness: shell.map(|m| m.bending_stiffness()),
+            membrane_stiffness: shell.map(|m| m.membrane_stiffness()),
+            mass_per_area: shell.map(|m| m.mass_per_area()),
+        }
+    }
+}
+
 /// `check`'s report.
 #[derive(Serialize)]
 pub struct Summary {
@@ -130,6 +159,8 @@ pub struct Summary {
     pub scene: String,
     /// Geometry.
     pub geometry: GeometrySummary,
+    /// Material.
+    pub material: MaterialSummary,
     /// D-NURBS.
     pub dnurbs: DnurbsSummary,
     /// Time settings.
@@ -226,6 +257,7 @@ pub fn summary(scene: &Scene) -> Result<Summary, Error> {
     Ok(Summary {
         scene: scene.path.display().to_string(),
         geometry,
+        material: MaterialSummary::of(&scene.material),
         dnurbs: DnurbsSummary {
             dofs_per_point: model.matrices().dofs_per_point,
             dofs: dof_map.n_total(),
@@ -297,10 +329,14 @@ fn rigid_and_stability_warnings(
     msm: Option<&MsmSummary>,
     warnings: &mut Vec<String>,
 ) {
-    if model.fixed_points().is_empty() && scene.constraints.linear.is_empty() {
+    if model.fixed_points().is_empty()
+        && scene.constraints.linear.is_empty()
+        && scene.constraints.edge.is_empty()
+    {
         warnings.push(
-            "constraints: no fixed control points and no linear constraints: the body is free \
-             to translate and rotate (K is singular; `steady` refuses it)"
+            "constraints: no fixed control points, no linear constraints and no edge \
+             conditions: the body is free to translate and rotate (K is singular; `steady` \
+             refuses it)"
                 .to_string(),
         );
     }

@@ -38,6 +38,7 @@ __all__ = [
     "Derivation",
     "matrices",
     "modes",
+    "steady",
     "simulate",
     "derive",
     "paper",
@@ -232,6 +233,39 @@ def modes(scene: Scene, count: int = 6) -> np.ndarray:
     if int(count) < 1:
         raise InputError(f"count {count}: must be at least 1")
     return _f64(_native.modes(scene._native, int(count)), (-1,))
+
+
+def steady(
+    scene: Scene, load_steps: int = 1, linear: bool = False, progress: bool = False
+) -> Dict[str, Any]:
+    """The D-NURBS at rest under the scene's loads (``nurbspring steady``).
+
+    For a Kirchhoff–Love scene the nonlinear equilibrium is followed by Newton with load
+    increments and recorded at ``load_steps`` equal load levels (``linear=True``: the
+    linearization at rest instead); a tension plate is one linear solve (its levels scale it).
+    Returns ``{"p", "probes", "path", "equations", "iterations", "increments",
+    "relative_residual", "warnings"}``: ``p`` the control points at rest, shape
+    ``(n_control_points, 3)`` (4 columns, the weight last, with weights as unknowns); ``probes`` as the CLI prints them; ``path`` a list of
+    ``{"lambda", "displacements"}`` with the probes' displacements at each level, as
+    load_path.csv holds them.
+    """
+    if int(load_steps) < 1:
+        raise InputError(f"load_steps {load_steps}: must be at least 1")
+    raw = _native.steady(scene._native, int(load_steps), bool(linear), bool(progress))
+    p = _f64(raw["p"], (-1,))
+    path = json.loads(raw["path"])
+    for level in path:
+        level["displacements"] = np.asarray(level["displacements"], dtype=np.float64)
+    return {
+        "p": p.reshape(-1, raw["dofs_per_point"]),
+        "probes": json.loads(raw["probes"]),
+        "path": path,
+        "equations": raw["equations"],
+        "iterations": raw["iterations"],
+        "increments": raw["increments"],
+        "relative_residual": raw["relative_residual"],
+        "warnings": list(raw["warnings"]),
+    }
 
 
 def _run(raw: Dict[str, Any]) -> Dict[str, Any]:

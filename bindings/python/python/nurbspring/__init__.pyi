@@ -111,6 +111,11 @@ def matrices(scene: Scene) -> Dict[str, Any]:
 def modes(scene: Scene, count: int = 6) -> npt.NDArray[np.float64]:
     """Lowest angular frequencies [rad/s], ascending."""
 
+def steady(
+    scene: Scene, load_steps: int = 1, linear: bool = False, progress: bool = False
+) -> Dict[str, Any]:
+    """The equilibrium under the scene's loads (the shell's Newton path at load_steps levels)."""
+
 def simulate(
     target: Union[Scene, MassSpring],
     model: Optional[str] = None,

@@ -47,6 +47,9 @@ class MassSpring:
 
 def matrices(scene: Scene) -> Dict[str, Any]: ...
 def modes(scene: Scene, count: int) -> bytes: ...
+def steady(
+    scene: Scene, load_steps: int = 1, linear: bool = False, progress: bool = False
+) -> Dict[str, Any]: ...
 def simulate_scene(
     scene: Scene,
     model: str,

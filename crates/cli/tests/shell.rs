@@ -1,0 +1,142 @@
+//! The Kirchhoff–Love examples run end to end through the binary and reproduce their
+//! benchmarks (docs/shell.md): the Scordelis–Lo roof, Sze's cantilever under end shear at every
+//! tabulated load level, and the cloth held at two corners falling under gravity.
+
+use std::path::PathBuf;
+
+use assert_cmd::Command;
+
+fn bin() -> Command {
+    let mut c = Command::cargo_bin("nurbspring").unwrap();
+    c.arg("--quiet");
+    c
+}
+
+fn example(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name)
+}
+
+fn json_of(out: &[u8]) -> serde_json::Value {
+    serde_json::from_slice(out).unwrap()
+}
+
+/// `steady --linear` of the quarter roof: the free edge's midpoint sinks by 0.3006 (the
+/// Kirchhoff–Love value; degree 4 on 16² spans gives 0.300592, Kratos' Shell3pElement
+/// 0.30059), within 1 %.
+#[test]
+fn scordelis_lo_example_sinks_by_the_reference() {
+    let out = bin()
+        .arg("steady")
+        .arg(example("scordelis_lo.toml"))
+        .arg("--linear")
+        .assert()
+        .success();
+    let v = json_of(&out.get_output().stdout);
+    let probe = &v["probes"][1];
+    assert_eq!(
+        (probe["u"].as_f64(), probe["v"].as_f64()),
+        (Some(1.0), Some(0.0))
+    );
+    let w = -probe["displacement"][2].as_f64().unwrap();
+    assert!((w - 0.3006).abs() < 0.01 * 0.3006, "{w}");
+}
+
+/// `steady --load-steps 20` of the cantilever: load_path.csv holds the tip's displacements at
+/// every level of Sze's table, each within 1 % of the tabulated w (and of −u, relative to w).
+#[test]
+fn cantilever_example_follows_the_sze_table() {
+    // P/P_max, −u_tip, w_tip (Sze, Liu, Lo 2004, Table 1).
+    let table = [
+        (0.05, 0.026, 0.663),
+        (0.10, 0.103, 1.309),
+        (0.20, 0.381, 2.493),
+        (0.30, 0.763, 3.488),
+        (0.40, 1.184, 4.292),
+        (0.50, 1.604, 4.933),
+        (0.60, 2.002, 5.444),
+        (0.70, 2.370, 5.855),
+        (0.80, 2.705, 6.190),
+        (0.90, 3.010, 6.467),
+        (1.00, 3.286, 6.698),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("strip");
+    bin()
+        .arg("steady")
+        .arg(example("cantilever_strip.toml"))
+        .args(["--load-steps", "20", "--out"])
+        .arg(&out_dir)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(out_dir.join("load_path.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    // Probe 1 is the tip (the scene's probe); its columns name (u, v).
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (cu, cw) = (col("probe1_dx[u=1;v=0.5]"), col("probe1_dz[u=1;v=0.5]"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 20);
+    for (load, u, w) in table {
+        let row = rows.iter().find(|r| (r[0] - load).abs() < 1e-12).unwrap();
+        let (du, dw) = (-row[cu], row[cw]);
+        assert!((dw - w).abs() < 0.01 * w, "P/Pmax {load}: w {dw} vs {w}");
+        assert!((du - u).abs() < 0.01 * w, "P/Pmax {load}: -u {du} vs {u}");
+    }
+}
+
+/// `simulate --model dnurbs` of the cloth: it falls and swings (the free corner drops by more
+/// than a tenth of its size within 0.5 s) and its energy never grows: the total (kinetic +
+/// elastic + load potential) stays at or below its start, up to Newton's tolerance, as the
+/// material damping only removes energy.
+#[test]
+fn cloth_example_falls_without_gaining_energy() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cloth");
+    bin()
+        .arg("simulate")
+        .arg(example("cloth_corners.toml"))
+        .args(["--model", "dnurbs", "--t-end", "0.3", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = energy
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let drop = rows.iter().map(|r| r[3]).fold(0.0_f64, f64::min).abs();
+    for r in &rows {
+        assert!(
+            r[4] <= 1e-3 * drop,
+            "t = {}: total energy {} (load potential drop {drop})",
+            r[0],
+            r[4]
+        );
+    }
+    let traj = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let last: Vec<f64> = traj
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let first: Vec<f64> = traj
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    // Columns: t, probe0 x y z, probe1 (0.5, 1) x y z, probe2 (1, 1) x y z.
+    assert!(
+        first[9] - last[9] > 0.05,
+        "the free corner fell by {}",
+        first[9] - last[9]
+    );
+}
