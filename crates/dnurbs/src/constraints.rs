@@ -375,12 +375,15 @@ fn resolve_edges(
                         terms: (0..3).map(|x| (m * a + x, n[x])).collect(),
                         rhs: dot(n, pa),
                     });
+                    // t ⊥ d exactly, so the right-hand side is 0 (the rest state's t · d is
+                    // round-off, which would make redundant rows at corners look
+                    // inconsistent).
                     for t in [t1, t2] {
                         rows.push(LinearConstraint {
                             terms: (0..3)
                                 .flat_map(|x| [(m * b + x, t[x]), (m * a + x, -t[x])])
                                 .collect(),
-                            rhs: dot(t, d),
+                            rhs: 0.0,
                         });
                     }
                 }
@@ -497,15 +500,19 @@ fn build_affine(
             }
             b[r] = *rhs;
         }
-        let (g_t, particular_t) = affine_solution_space(&a, &b, 1e-12).map_err(|e| match e {
-            LinalgError::Singular { detail } => DnurbsError::InvalidConstraint {
-                detail: format!(
-                    "the {} linear constraints on the free dofs are inconsistent: {detail}",
-                    rows.len()
-                ),
-            },
-            other => DnurbsError::Linalg(other),
-        })?;
+        // The right-hand sides hold coordinates of the rest state: their size bounds the
+        // round-off that can separate redundant rows.
+        let x_scale = p0.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        let (g_t, particular_t) =
+            affine_solution_space(&a, &b, 1e-12, x_scale).map_err(|e| match e {
+                LinalgError::Singular { detail } => DnurbsError::InvalidConstraint {
+                    detail: format!(
+                        "the {} linear constraints on the free dofs are inconsistent: {detail}",
+                        rows.len()
+                    ),
+                },
+                other => DnurbsError::Linalg(other),
+            })?;
         // A consistent system is solved exactly by the particular solution.
         let ag = a.mul_vec(&particular_t);
         let b_norm = b.iter().map(|x| x * x).sum::<f64>().sqrt();

@@ -83,4 +83,4 @@ pub use options::{
 };
 pub use rational::{DEFAULT_MIN_WEIGHT_RATIO, RationalStepper};
 pub use run::{integrator_problem, names as integrator_names};
-pub use shell::{ShellEnergy, ShellMaterial};
+pub use shell::{ShellEnergy, ShellMaterial, obstacle};

@@ -153,13 +153,16 @@ pub fn nonnegative_least_squares(a: &DenseMatrix, b: &[f64]) -> Result<Vec<f64>,
 /// (columns, orthonormal) spans the null space of A and `g` is the minimum-norm particular
 /// solution, both from the full SVD `A = U Σ Vᵀ` (singular values `≤ tol·σ_max` count as zero;
 /// `tol ≤ 0` means `max(rows, cols)·ε`). Used for linear constraints `p = G q + g` (docs/math.md §4).
-/// Errors with [`LinalgError::Singular`] when the system is inconsistent.
+/// Errors with [`LinalgError::Singular`] when the system is inconsistent: when the least
+/// residual exceeds the round-off of the larger of `‖b‖`, `σ_max ‖g‖` and `σ_max · x_scale`
+/// (`x_scale`: the size of the quantities `b` was computed from, e.g. coordinates moved to the
+/// right-hand side, whose round-off can leave redundant rows slightly apart; 0 when none).
 ///
 /// ```
 /// use nurbspring_linalg::{affine_solution_space, DenseMatrix};
 /// // x0 + x1 = 2 in R²: null space along (1, −1)/√2, minimum-norm solution (1, 1).
 /// let a = DenseMatrix::from_row_major(1, 2, vec![1.0, 1.0]);
-/// let (null, g) = affine_solution_space(&a, &[2.0], 0.0).unwrap();
+/// let (null, g) = affine_solution_space(&a, &[2.0], 0.0, 0.0).unwrap();
 /// assert_eq!(null.ncols(), 1);
 /// assert!((g[0] - 1.0).abs() < 1e-14 && (g[1] - 1.0).abs() < 1e-14);
 /// assert!((null[(0, 0)] + null[(1, 0)]).abs() < 1e-14);
@@ -168,6 +171,7 @@ pub fn affine_solution_space(
     a: &DenseMatrix,
     b: &[f64],
     tol: f64,
+    x_scale: f64,
 ) -> Result<(DenseMatrix, Vec<f64>), LinalgError> {
     check_system("affine_solution_space", a, b)?;
     let (r, n) = (a.nrows(), a.ncols());
@@ -197,7 +201,10 @@ pub fn affine_solution_space(
     }
     let null = DenseMatrix::from_fn(n, n - rank, |i, j| v[(i, rank + j)]);
     let residual: Vec<f64> = a.mul_vec(&g).iter().zip(b).map(|(p, q)| p - q).collect();
-    let scale = norm(b).max(smax * norm(&g)).max(f64::MIN_POSITIVE);
+    let scale = norm(b)
+        .max(smax * norm(&g))
+        .max(smax * x_scale)
+        .max(f64::MIN_POSITIVE);
     if norm(&residual) > 1e3 * rel * scale {
         return Err(LinalgError::Singular {
             detail: format!(

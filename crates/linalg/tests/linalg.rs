@@ -765,7 +765,7 @@ fn affine_solution_space_spans_all_solutions() {
     let (r, n) = (3, 7);
     let a = random_dense(r, n, &mut rng);
     let b: Vec<f64> = (0..r).map(|_| rng.next()).collect();
-    let (null, g) = affine_solution_space(&a, &b, 0.0).unwrap();
+    let (null, g) = affine_solution_space(&a, &b, 0.0, 0.0).unwrap();
     assert_eq!((null.nrows(), null.ncols()), (7, 4));
     let ag = a.mul_vec(&g);
     assert!(ag.iter().zip(&b).all(|(p, q)| (p - q).abs() < tol::LSTSQ));
@@ -783,11 +783,11 @@ fn affine_solution_space_spans_all_solutions() {
     });
     let mut b2 = b.clone();
     b2.push(b[0] + b[1]);
-    let (null2, _) = affine_solution_space(&a2, &b2, 1e-10).unwrap();
+    let (null2, _) = affine_solution_space(&a2, &b2, 1e-10, 0.0).unwrap();
     assert_eq!(null2.ncols(), 4);
     b2[3] += 1.0;
     assert!(matches!(
-        affine_solution_space(&a2, &b2, 1e-10),
+        affine_solution_space(&a2, &b2, 1e-10, 0.0),
         Err(LinalgError::Singular { .. })
     ));
 }

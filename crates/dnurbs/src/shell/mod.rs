@@ -4,6 +4,7 @@
 mod energy;
 mod kinematics;
 mod material;
+pub mod obstacle;
 
 pub use energy::ShellEnergy;
 pub use material::ShellMaterial;

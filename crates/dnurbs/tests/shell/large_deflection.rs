@@ -1,10 +1,9 @@
 //! The geometrically nonlinear benchmarks tabulated by Sze, Liu and Lo (2004, Finite Elements
 //! in Analysis and Design 40:1551), every tabulated load level within 1 %.
 
-use nurbspring_dnurbs::{Edge, EdgeLoad, Loads, PathSettings, ShellMaterial};
-use nurbspring_geom::{KnotVector, NurbsSurface};
+use nurbspring_dnurbs::{PathSettings, obstacle};
 
-use crate::support::*;
+use crate::support::displacement;
 
 /// Sze et al. Table 1 (§3.1, cantilever under end shear, 16 × 1 S4R): `P/P_max`, `−u_tip`,
 /// `w_tip`.
@@ -36,24 +35,8 @@ const CANTILEVER: [(f64, f64, f64); 20] = [
 /// (relative to w, the larger: −u is 0.026 at the first level).
 #[test]
 fn cantilever_under_end_shear_follows_the_sze_table() {
-    let m = ShellMaterial {
-        young: 1.2e6,
-        poisson: 0.0,
-        thickness: 0.1,
-        density: 1.0,
-        gamma: 0.0,
-    };
-    let s = refined(&rectangle(10.0, 1.0), 3, (16, 1));
-    let clamp: Vec<usize> = row_u(&s, 0).into_iter().chain(row_u(&s, 1)).collect();
-    let loads = Loads {
-        edges: vec![EdgeLoad {
-            edge: Edge::U1,
-            force: [0.0, 0.0, 4.0],
-            moment: 0.0,
-        }],
-        ..Loads::default()
-    };
-    let model = shell_model(s, m, loads, vec![], clamp);
+    let bench = obstacle::sze_cantilever(3, 16).unwrap();
+    let model = &bench.model;
     let settings = PathSettings {
         levels: 20,
         ..PathSettings::default()
@@ -68,7 +51,7 @@ fn cantilever_under_end_shear_follows_the_sze_table() {
     let mut worst = 0.0_f64;
     for (level, &(load, u_ref, w_ref)) in path.levels.iter().zip(&CANTILEVER) {
         assert!((level.lambda - load).abs() < 1e-12);
-        let d = displacement(&model, 1.0, 0.5, &level.p);
+        let d = displacement(model, 1.0, 0.5, &level.p);
         let (eu, ew) = ((-d[0] - u_ref).abs() / w_ref, (d[2] - w_ref).abs() / w_ref);
         eprintln!(
             "P/Pmax {load:.2}: -u {:.4} ({u_ref}), w {:.4} ({w_ref})",
@@ -108,64 +91,13 @@ const SLIT_ANNULAR: [(f64, f64, f64); 23] = [
     (1.00, 13.891, 17.528),
 ];
 
-/// An annulus `r_i ≤ r ≤ r_o`, `0 ≤ θ ≤ 2π` cut along θ = 0 (a slit), in the plane z = 0: u
-/// along r (degree `degree`, `spans.0` spans), v along θ (degree `degree`, `spans.1` uniform
-/// spans), the circle interpolated at the Greville abscissae (its error is below 1e-7 of the
-/// radius for 80 cubic spans).
-fn slit_annulus(ri: f64, ro: f64, degree: usize, spans: (usize, usize)) -> NurbsSurface {
-    let kv = KnotVector::clamped_uniform(degree, spans.1).unwrap();
-    let n = kv.n_basis();
-    let g = kv.greville();
-    let basis = nurbspring_geom::BSplineBasis::new(kv.clone());
-    let mut a = nurbspring_linalg::DenseMatrix::zeros(n, n);
-    for (i, &t) in g.iter().enumerate() {
-        for (j, value) in basis.all_values(t).unwrap().into_iter().enumerate() {
-            a[(i, j)] = value;
-        }
-    }
-    let angle = |t: f64| 2.0 * std::f64::consts::PI * t;
-    let cx =
-        nurbspring_linalg::solve_dense(&a, &g.iter().map(|&t| angle(t).cos()).collect::<Vec<_>>())
-            .unwrap();
-    let cy =
-        nurbspring_linalg::solve_dense(&a, &g.iter().map(|&t| angle(t).sin()).collect::<Vec<_>>())
-            .unwrap();
-    let ku = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
-    let mut pts = Vec::new();
-    for r in [ri, ro] {
-        for j in 0..n {
-            pts.push([r * cx[j], r * cy[j], 0.0]);
-        }
-    }
-    let coarse = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 2 * n]).unwrap();
-    let (e, _) = coarse.elevate_degree(degree - 1, 0).unwrap();
-    let inner: Vec<f64> = (1..spans.0).map(|k| k as f64 / spans.0 as f64).collect();
-    e.refine_knots(&inner, &[]).unwrap().0
-}
-
 /// §3.3: R_i = 6, R_o = 10, t = 0.03, E = 21e6, ν = 0, clamped along one side of the slit, a
 /// vertical line force of up to 0.8 per unit length along the other. Every tabulated level
 /// within 1 % of w_A and w_B.
 #[test]
 fn slit_annular_plate_follows_the_sze_table() {
-    let m = ShellMaterial {
-        young: 21e6,
-        poisson: 0.0,
-        thickness: 0.03,
-        density: 1.0,
-        gamma: 0.0,
-    };
-    let s = slit_annulus(6.0, 10.0, 3, (8, 64));
-    let clamp: Vec<usize> = row_v(&s, 0).into_iter().chain(row_v(&s, 1)).collect();
-    let loads = Loads {
-        edges: vec![EdgeLoad {
-            edge: Edge::V1,
-            force: [0.0, 0.0, 0.8],
-            moment: 0.0,
-        }],
-        ..Loads::default()
-    };
-    let model = shell_model(s, m, loads, vec![], clamp);
+    let bench = obstacle::slit_annular_plate(3, (8, 64)).unwrap();
+    let model = &bench.model;
     let settings = PathSettings {
         levels: 40,
         ..PathSettings::default()
@@ -185,8 +117,8 @@ fn slit_annular_plate_follows_the_sze_table() {
             .find(|l| (l.lambda - load).abs() < 1e-9)
             .unwrap();
         let (wa, wb) = (
-            displacement(&model, 0.0, 1.0, &level.p)[2],
-            displacement(&model, 1.0, 1.0, &level.p)[2],
+            displacement(model, 0.0, 1.0, &level.p)[2],
+            displacement(model, 1.0, 1.0, &level.p)[2],
         );
         let e = ((wa - wa_ref).abs() / wa_ref).max((wb - wb_ref).abs() / wb_ref);
         eprintln!("P/Pmax {load:.3}: w_A {wa:.4} ({wa_ref}), w_B {wb:.4} ({wb_ref}), {e:.2e}");

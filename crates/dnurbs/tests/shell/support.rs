@@ -103,74 +103,12 @@ pub fn max_abs(x: &[f64]) -> f64 {
 
 // ---- Geometries of the benchmarks ----
 
+pub use nurbspring_dnurbs::obstacle::{rectangle, refined as refine_exact};
 use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, LinearConstraint, Loads};
 
-/// `coarse` elevated to `degree` in both directions and split into `spans` equal spans per
-/// direction (a Bézier patch on [0, 1]²).
+/// [`refine_exact`] of a patch that refines (the benchmark patches do).
 pub fn refined(coarse: &NurbsSurface, degree: usize, spans: (usize, usize)) -> NurbsSurface {
-    let (pu, pv) = (coarse.basis_u().degree(), coarse.basis_v().degree());
-    let (e, _) = coarse.elevate_degree(degree - pu, degree - pv).unwrap();
-    let inner = |n: usize| -> Vec<f64> { (1..n).map(|k| k as f64 / n as f64).collect() };
-    e.refine_knots(&inner(spans.0), &inner(spans.1)).unwrap().0
-}
-
-/// A flat rectangle `[0, a] × [0, b]` in the plane z = 0 (bilinear Bézier patch).
-pub fn rectangle(a: f64, b: f64) -> NurbsSurface {
-    let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
-    let pts = vec![[0., 0., 0.], [0., b, 0.], [a, 0., 0.], [a, b, 0.]];
-    NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 4]).unwrap()
-}
-
-/// A cylindrical sector: axis x over `[0, length]`, radius `r`, the arc from angle `a0` to
-/// `a1` (< π apart) in the y-z plane, angle measured from +y towards +z. u along x (linear),
-/// v along the arc (one rational quadratic segment).
-pub fn cylinder_sector(r: f64, length: f64, a0: f64, a1: f64) -> NurbsSurface {
-    let half = 0.5 * (a1 - a0);
-    let mid = 0.5 * (a0 + a1);
-    let arc = [
-        [r * a0.cos(), r * a0.sin()],
-        [r / half.cos() * mid.cos(), r / half.cos() * mid.sin()],
-        [r * a1.cos(), r * a1.sin()],
-    ];
-    let w = [1.0, half.cos(), 1.0];
-    let mut pts = Vec::new();
-    let mut weights = Vec::new();
-    for x in [0.0, length] {
-        for (c, &wk) in arc.iter().zip(&w) {
-            pts.push([x, c[0], c[1]]);
-            weights.push(wk);
-        }
-    }
-    let ku = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
-    let kv = KnotVector::try_new(vec![0., 0., 0., 1., 1., 1.], 2).unwrap();
-    NurbsSurface::try_new(ku, kv, pts, weights).unwrap()
-}
-
-/// A quarter of a spherical zone of radius `r` about the z axis: u along the meridian from the
-/// equator (latitude 0) to latitude `top`, v along the parallel from longitude 0 (+x) to 90°
-/// (+y). Biquadratic rational (one segment each way).
-pub fn sphere_zone(r: f64, top: f64) -> NurbsSurface {
-    let half = 0.5 * top;
-    // Meridian in (ρ, z): from (r, 0) to (r cos top, r sin top).
-    let meridian = [
-        [r, 0.0],
-        [r / half.cos() * half.cos(), r / half.cos() * half.sin()],
-        [r * top.cos(), r * top.sin()],
-    ];
-    let wm = [1.0, half.cos(), 1.0];
-    // Quarter parallel in (x, y) for unit radius.
-    let parallel = [[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-    let wp = [1.0, std::f64::consts::FRAC_1_SQRT_2, 1.0];
-    let mut pts = Vec::new();
-    let mut weights = Vec::new();
-    for (m, &w1) in meridian.iter().zip(&wm) {
-        for (c, &w2) in parallel.iter().zip(&wp) {
-            pts.push([m[0] * c[0], m[0] * c[1], m[1]]);
-            weights.push(w1 * w2);
-        }
-    }
-    let k = KnotVector::try_new(vec![0., 0., 0., 1., 1., 1.], 2).unwrap();
-    NurbsSurface::try_new(k.clone(), k, pts, weights).unwrap()
+    refine_exact(coarse, degree, spans).unwrap()
 }
 
 /// `p0` values of the generalized coordinates of `s` (3 per point).
