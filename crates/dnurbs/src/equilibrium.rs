@@ -10,9 +10,8 @@ use crate::{DnurbsError, DnurbsModel};
 const ARMIJO: f64 = 1e-4;
 /// Halvings of a Newton step before the smallest is taken.
 const MAX_HALVINGS: usize = 12;
-/// Relative residual below which Newton steps are taken whole (the potential's changes are
-/// then at its round-off).
-const LINE_SEARCH_FROM: f64 = 1e-6;
+/// A step that multiplies the residual by at most this is accepted without the potential.
+const RESIDUAL_HALVING: f64 = 0.5;
 
 /// An increment converged in at most this many Newton iterations lets the next grow by 1.5.
 const EASY_ITERATIONS: usize = 5;
@@ -77,6 +76,8 @@ struct Factor {
 }
 
 impl Factor {
+    /// `K x = rhs` by a fresh numeric factorization of `k` (the symbolic one reused):
+    /// Cholesky while `k` is positive definite, LU once it is not.
     fn solve(&mut self, k: &SparseMatrix, rhs: &[f64]) -> Result<Vec<f64>, DnurbsError> {
         let spd = match self.spd.as_mut() {
             Some(s) => s.refactor(k).map(|_| ()),
@@ -84,17 +85,22 @@ impl Factor {
                 self.spd = Some(s);
             }),
         };
+        let apply = |x: &[f64], this: &Factor| -> Vec<f64> {
+            match (&this.spd, &this.lu) {
+                (Some(s), _) => s.solve(x),
+                (None, Some(lu)) => lu.solve(x),
+                (None, None) => unreachable!("a factor was made"),
+            }
+        };
         match spd {
-            Ok(()) => Ok(self.spd.as_ref().expect("factored").solve(rhs)),
+            Ok(()) => self.lu = None,
             Err(LinalgError::NotPositiveDefinite { .. }) => {
                 self.spd = None;
-                let lu = LuSolver::new(k)?;
-                let x = lu.solve(rhs);
-                self.lu = Some(lu);
-                Ok(x)
+                self.lu = Some(LuSolver::new(k)?);
             }
-            Err(e) => Err(e.into()),
+            Err(e) => return Err(e.into()),
         }
+        Ok(apply(rhs, self))
     }
 }
 
@@ -359,25 +365,33 @@ impl DnurbsModel {
                     iterations: it + 1,
                 });
             }
-            // A descent direction (positive definite tangent) far from convergence is
-            // accepted by the Armijo test on the total potential, halving the step until it
-            // lowers the potential enough; near convergence (where the potential's changes
-            // are round-off) and along a direction of ascent the full step is taken.
+            // The step is accepted when it lowers the total potential by the Armijo fraction
+            // of its slope (a descent direction), or when it halves the residual (Newton near
+            // convergence, where the potential's changes are round-off, and along a direction
+            // of ascent); otherwise it is halved, at most MAX_HALVINGS times.
             let slope = dot(&r, &dq);
             let mut alpha = 1.0;
-            if slope < 0.0 && rn > LINE_SEARCH_FROM * scale {
-                for _ in 0..MAX_HALVINGS {
-                    let t: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + alpha * b).collect();
-                    if self.potential_change(q, &t, lambda) <= ARMIJO * alpha * slope {
-                        break;
-                    }
-                    alpha *= 0.5;
+            let mut accepted = None;
+            for _ in 0..=MAX_HALVINGS {
+                let t: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + alpha * b).collect();
+                let (r_t, scale_t) = self.residual(&t, lambda);
+                let rt = norm(&r_t);
+                let lowers = slope < 0.0
+                    && rt.is_finite()
+                    && self.potential_change(q, &t, lambda) <= ARMIJO * alpha * slope;
+                if rt <= RESIDUAL_HALVING * rn || lowers {
+                    accepted = Some((t, r_t, scale_t));
+                    break;
                 }
+                alpha *= 0.5;
             }
-            for (a, b) in q.iter_mut().zip(&dq) {
-                *a += alpha * b;
+            match accepted {
+                Some((t, r_t, scale_t)) => {
+                    q.copy_from_slice(&t);
+                    (r, scale) = (r_t, scale_t);
+                }
+                None => return Ok(Newton::Failed { iterations: it + 1 }),
             }
-            (r, scale) = self.residual(q, lambda);
         }
         let rn = norm(&r);
         if rn <= settings.tolerance * scale {

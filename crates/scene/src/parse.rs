@@ -374,6 +374,10 @@ mod tests {
                 "surface" => format!("{base}zzz_bogus = 1\n"),
                 "curve" => "[curve]\ndegree = 1\nzzz_bogus = 1\n".to_string(),
                 "loads.point" => format!("{base}[[loads.point]]\nu = 0.5\nzzz_bogus = 1\n"),
+                "loads.edge" => format!("{base}[[loads.edge]]\nedge = \"u0\"\nzzz_bogus = 1\n"),
+                "constraints.edge" => {
+                    format!("{base}[[constraints.edge]]\nedge = \"u0\"\nzzz_bogus = 1\n")
+                }
                 "constraints.linear" => format!("{base}[[constraints.linear]]\nzzz_bogus = 1\n"),
                 "constraints.linear.terms" => format!(
                     "{base}[[constraints.linear]]\nterms = [{{ point = [0, 0], zzz_bogus = 1 }}]\n"

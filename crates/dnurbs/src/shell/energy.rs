@@ -34,11 +34,21 @@ struct Scratch {
     r: Vec<f64>,
     local: Vec<(usize, f64)>,
     x: Vec<[f64; 3]>,
+    /// `ψ_a` per local point.
     psi: Vec<f64>,
-    dual: Vec<[f64; 3]>,
+    /// The components of `v_a = R_{a,γ} a^γ`, one array over the points each.
+    dual: [Vec<f64>; 3],
+    /// `(t³/12) C β_a` per point.
     bending: Vec<[f64; 3]>,
-    membrane: Vec<[[f64; 3]; 2]>,
+    /// `β_a` (Voigt, the 12 entry doubled) per point.
     beta: Vec<[f64; 3]>,
+    /// The two columns of `t C C_a` (3 components each), one array over the points each.
+    membrane: [Vec<f64>; 6],
+    /// Arrays over b of one row a: Q00, Q01, Q10, Q11, σ, the a_3 ⊗ a_3 coefficient.
+    q: [Vec<f64>; 6],
+    /// The element tangent, component-major (see `add_point`).
+    kcomp: Vec<f64>,
+    /// The element tangent in the layout of `TensorLayout::add_block`.
     block: Vec<f64>,
     force: Vec<f64>,
 }
@@ -46,17 +56,41 @@ struct Scratch {
 impl Scratch {
     fn new(nl: usize, tangent: bool) -> Self {
         let ld = 3 * nl;
+        let arrays3 = || std::array::from_fn(|_| vec![0.0; nl]);
+        let arrays6 = || std::array::from_fn(|_| vec![0.0; nl]);
         Self {
             r: vec![0.0; 6 * nl],
             local: vec![(0, 0.0); nl],
             x: vec![[0.0; 3]; nl],
             psi: vec![0.0; nl],
-            dual: vec![[0.0; 3]; nl],
+            dual: arrays3(),
             bending: vec![[0.0; 3]; nl],
-            membrane: vec![[[0.0; 3]; 2]; nl],
             beta: vec![[0.0; 3]; nl],
+            membrane: arrays6(),
+            q: arrays6(),
+            kcomp: vec![0.0; if tangent { 9 * nl * nl } else { 0 }],
             block: vec![0.0; if tangent { ld * ld } else { 0 }],
             force: vec![0.0; ld],
+        }
+    }
+
+    /// `block[(3a + i)·3n + 3b + j] = kcomp[((i·3 + j)·n + a)·n + b]` for `i ≤ j`, and the
+    /// mirror image `block[(3b + j)·3n + 3a + i]` of the same value (the tangent is
+    /// symmetric; `add_point` fills only `i ≤ j`).
+    fn block_from_components(&mut self) {
+        let nl = self.x.len();
+        let ld = 3 * nl;
+        for i in 0..3 {
+            for j in i..3 {
+                for a in 0..nl {
+                    let start = ((i * 3 + j) * nl + a) * nl;
+                    let src = &self.kcomp[start..start + nl];
+                    for (b, &v) in src.iter().enumerate() {
+                        self.block[(3 * a + i) * ld + 3 * b + j] = v;
+                        self.block[(3 * b + j) * ld + 3 * a + i] = v;
+                    }
+                }
+            }
         }
     }
 }
@@ -193,6 +227,7 @@ impl ShellEnergy {
     }
 
     /// The rational basis of element `(t, e_v)` at its quadrature point `(x, y)` into `s.r`.
+    #[inline(always)]
     fn basis_at(&self, t: usize, e_v: usize, x: usize, y: usize, s: &mut Scratch) {
         let (nu, nv) = (self.bases_u.at(t, x), self.bases_v.at(e_v, y));
         rational_basis(nu, nv, &s.local, 2, &mut s.r);
@@ -276,7 +311,6 @@ impl ShellEnergy {
     fn run(&self, p: &[f64], pass: Pass, values: &mut [f64], force: &mut [f64]) {
         let layout = &self.layout;
         let nl = layout.n_local();
-        let g = self.points_per_span;
         let tangent = pass == Pass::ForceAndTangent;
         layout.for_each_element_row(
             &mut [],
@@ -290,20 +324,24 @@ impl ShellEnergy {
                     self.fill_local(t, e_v, s);
                     self.gather(p, s);
                     s.force.fill(0.0);
-                    s.block.fill(0.0);
-                    let base = self.element_base(t, e_v);
-                    for x in 0..g {
-                        for y in 0..g {
-                            self.basis_at(t, e_v, x, y, s);
-                            add_point(&self.rest[base + x * g + y], tangent, s);
-                        }
-                    }
+                    s.kcomp.fill(0.0);
+                    // The element's points compiled for the widest vector unit of the CPU
+                    // (pulp's runtime dispatch; no fused multiply-adds, so the same
+                    // operations in the same order at every width).
+                    pulp::Arch::new().dispatch(ElementPoints {
+                        energy: self,
+                        t,
+                        e_v,
+                        tangent,
+                        scratch: s,
+                    });
                     for (a, &(k, _)) in s.local.iter().enumerate() {
                         for i in 0..3 {
                             out.vector[3 * k + i - out.dof_base] += s.force[3 * a + i];
                         }
                     }
                     if tangent {
+                        s.block_from_components();
                         let (su, sv) = (&layout.spans_u[t], &layout.spans_v[e_v]);
                         layout.add_block(su.span, sv.span, &[], &s.block, out);
                     }
@@ -313,8 +351,45 @@ impl ShellEnergy {
     }
 }
 
-/// Adds one quadrature point's force (and tangent) to `s.force` (and `s.block`), with
+/// The quadrature points of element `(t, e_v)`, added to the scratch's force and tangent.
+struct ElementPoints<'a> {
+    energy: &'a ShellEnergy,
+    t: usize,
+    e_v: usize,
+    tangent: bool,
+    scratch: &'a mut Scratch,
+}
+
+impl pulp::WithSimd for ElementPoints<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        let ElementPoints {
+            energy,
+            t,
+            e_v,
+            tangent,
+            scratch,
+        } = self;
+        let g = energy.points_per_span;
+        let base = energy.element_base(t, e_v);
+        for x in 0..g {
+            for y in 0..g {
+                energy.basis_at(t, e_v, x, y, scratch);
+                add_point(&energy.rest[base + x * g + y], tangent, scratch);
+            }
+        }
+    }
+}
+
+/// Adds one quadrature point's force (and tangent) to `s.force` (and `s.kcomp`), with
 /// `s.r` the rational basis, `s.x` the current local control points (docs/math.md §10.3).
+///
+/// The tangent is accumulated component-major, `kcomp[((i·3 + j)·n + a)·n + b]` for dofs
+/// `(a, i)`, `(b, j)`: for fixed `(a, i, j)` every term is a combination of arrays over `b`
+/// with scalar coefficients, a loop the compiler vectorizes.
+#[inline(always)]
 fn add_point(rest: &RestPoint, tangent: bool, s: &mut Scratch) {
     let nl = s.x.len();
     let w = rest.weight;
@@ -343,69 +418,88 @@ fn add_point(rest: &RestPoint, tangent: bool, s: &mut Scratch) {
         }
         if tangent {
             s.psi[a] = psi;
-            s.beta[a] = beta;
-            s.dual[a] = std::array::from_fn(|k| r1 * dual[0][k] + r2 * dual[1][k]);
             let bv = [beta[0], beta[1], 2.0 * beta[2]];
+            s.beta[a] = bv;
             s.bending[a] = super::kinematics::mat_vec(&rest.bending, bv);
+            for k in 0..3 {
+                s.dual[k][a] = r1 * dual[0][k] + r2 * dual[1][k];
+            }
             // Columns of t C C_a with C_a = [[R1, 0], [0, R2], [R2, R1]].
             let m = &rest.membrane;
-            s.membrane[a] = [
-                std::array::from_fn(|i| m[i][0] * r1 + m[i][2] * r2),
-                std::array::from_fn(|i| m[i][1] * r2 + m[i][2] * r1),
-            ];
+            for k in 0..3 {
+                s.membrane[k][a] = m[k][0] * r1 + m[k][2] * r2;
+                s.membrane[3 + k][a] = m[k][1] * r2 + m[k][2] * r1;
+            }
         }
     }
     if !tangent {
         return;
     }
-    let ld = 3 * nl;
     let [g11, g22, g12] = frame.inverse_metric;
     let hb = cw[0] * frame.curvature[0] + cw[1] * frame.curvature[1] + cw[2] * frame.curvature[2];
-    let outer = |x: [f64; 3], y: [f64; 3]| -> [[f64; 3]; 3] {
-        std::array::from_fn(|i| std::array::from_fn(|j| x[i] * y[j]))
-    };
-    let a3a3 = outer(a3, a3);
+    let (r1s, rest_r) = r[nl..].split_at(nl);
+    let r2s = &rest_r[..nl];
+    // Products of the frame vectors' components, the scalar coefficients of the b-loops.
+    let frame_vectors = [a1, a2, a3];
+    let prod = |x: usize, i: usize, y: usize, j: usize| frame_vectors[x][i] * frame_vectors[y][j];
+    let Scratch {
+        kcomp,
+        q,
+        psi,
+        dual: vb,
+        bending,
+        beta,
+        membrane,
+        ..
+    } = s;
     for a in 0..nl {
-        let (r1a, r2a) = (r[nl + a], r[2 * nl + a]);
-        let (psi_a, va) = (s.psi[a], s.dual[a]);
+        let (r1a, r2a) = (r1s[a], r2s[a]);
+        let psi_a = psi[a];
+        let va = [vb[0][a], vb[1][a], vb[2][a]];
         let ga = [r1a * g11 + r2a * g12, r1a * g12 + r2a * g22];
-        for b in a..nl {
-            let (r1b, r2b) = (r[nl + b], r[2 * nl + b]);
-            let mb = &s.membrane[b];
+        let ka = bending[a];
+        // Arrays over b: Q_{αβ}(a, b) (membrane), σ_ab (membrane geometric), the a_3 ⊗ a_3
+        // coefficient (bending material + geometric).
+        let [q00, q01, q10, q11, sigma, c33] = q;
+        for b in 0..nl {
+            let (r1b, r2b) = (r1s[b], r2s[b]);
             // Q_{αβ} = (C_a column α) · (t C C_b column β).
-            let q = [
-                [
-                    r1a * mb[0][0] + r2a * mb[0][2],
-                    r1a * mb[1][0] + r2a * mb[1][2],
-                ],
-                [
-                    r2a * mb[0][1] + r1a * mb[0][2],
-                    r2a * mb[1][1] + r1a * mb[1][2],
-                ],
-            ];
-            let u1: [f64; 3] = std::array::from_fn(|k| q[0][0] * a1[k] + q[0][1] * a2[k]);
-            let u2: [f64; 3] = std::array::from_fn(|k| q[1][0] * a1[k] + q[1][1] * a2[k]);
-            let sigma = n[0] * r1a * r1b + n[1] * r2a * r2b + n[2] * (r1a * r2b + r2a * r1b);
-            let bb = s.beta[b];
-            let bending = dot(s.bending[a], [bb[0], bb[1], 2.0 * bb[2]]);
-            let s_ab = ga[0] * r1b + ga[1] * r2b;
-            let c33 = bending + s_ab * hb;
-            let (psi_b, vb) = (s.psi[b], s.dual[b]);
-            for i in 0..3 {
-                for j in 0..3 {
-                    let mut kij = a1[i] * u1[j]
-                        + a2[i] * u2[j]
-                        + c33 * a3a3[i][j]
-                        + psi_a * vb[i] * a3[j]
-                        + psi_b * a3[i] * va[j];
-                    if i == j {
-                        kij += sigma;
-                    }
-                    let kij = w * kij;
-                    s.block[(3 * a + i) * ld + 3 * b + j] += kij;
-                    if b != a {
-                        s.block[(3 * b + j) * ld + 3 * a + i] += kij;
-                    }
+            q00[b] = r1a * membrane[0][b] + r2a * membrane[2][b];
+            q01[b] = r1a * membrane[3][b] + r2a * membrane[5][b];
+            q10[b] = r2a * membrane[1][b] + r1a * membrane[2][b];
+            q11[b] = r2a * membrane[4][b] + r1a * membrane[5][b];
+            sigma[b] = n[0] * r1a * r1b + n[1] * r2a * r2b + n[2] * (r1a * r2b + r2a * r1b);
+            let bb = beta[b];
+            c33[b] =
+                ka[0] * bb[0] + ka[1] * bb[1] + ka[2] * bb[2] + (ga[0] * r1b + ga[1] * r2b) * hb;
+        }
+        // K[j][i][b][a] = K[i][j][a][b]: the blocks below the component diagonal are
+        // mirrored when the element block is written (`block_from_components`).
+        for i in 0..3 {
+            for j in i..3 {
+                let c00 = w * prod(0, i, 0, j);
+                let c01 = w * prod(0, i, 1, j);
+                let c10 = w * prod(1, i, 0, j);
+                let c11 = w * prod(1, i, 1, j);
+                let c3 = w * prod(2, i, 2, j);
+                let cv = w * psi_a * a3[j];
+                let cp = w * a3[i] * va[j];
+                let cs = if i == j { w } else { 0.0 };
+                // Every array re-sliced to the row's length: the loop has no bounds checks
+                // and vectorizes.
+                let start = ((i * 3 + j) * nl + a) * nl;
+                let row = &mut kcomp[start..start + nl];
+                let (q00, q01, q10, q11) = (&q00[..nl], &q01[..nl], &q10[..nl], &q11[..nl]);
+                let (c33s, vbi, psis, sig) = (&c33[..nl], &vb[i][..nl], &psi[..nl], &sigma[..nl]);
+                for b in 0..nl {
+                    row[b] += c00 * q00[b]
+                        + c01 * q01[b]
+                        + c10 * q10[b]
+                        + c11 * q11[b]
+                        + c3 * c33s[b]
+                        + cv * vbi[b]
+                        + cp * psis[b]
+                        + cs * sig[b];
                 }
             }
         }

@@ -51,6 +51,7 @@ pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 impl Frame {
     /// The frame of `x = Σ_a R_a x_a` from the slot-major rational basis `r` of `n_local`
     /// points and the local control points `points`.
+    #[inline(always)]
     pub(crate) fn new(r: &[f64], points: &[[f64; 3]]) -> Self {
         let nl = points.len();
         let mut tangents = [[0.0; 3]; 2];
@@ -133,6 +134,7 @@ pub(crate) struct Resultants {
 }
 
 impl Resultants {
+    #[inline(always)]
     pub(crate) fn new(frame: &Frame, rest: &RestPoint) -> Self {
         let strain = [
             0.5 * (frame.metric[0] - rest.metric[0]),
