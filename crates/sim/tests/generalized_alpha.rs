@@ -83,13 +83,13 @@ fn parameters_follow_chung_and_hulbert_and_a_bad_rho_is_refused() {
     for rho in [0.0, 0.3, 0.8, 1.0] {
         let p = GeneralizedAlphaParameters::from_rho_infinity(rho).unwrap();
         assert_eq!(p.rho_infinity, rho);
-        // Chung & Hulbert eq. (25): α_m = (2ρ∞ − 1)/(ρ∞ + 1), α_f = ρ∞/(ρ∞ + 1); second order
+        // Chung & Hulbert: α_m = (2ρ∞ − 1)/(ρ∞ + 1), α_f = ρ∞/(ρ∞ + 1); second order
         // needs γ = ½ − α_m + α_f, and β = ¼(1 − α_m + α_f)².
         assert!((p.alpha_m - (2.0 * rho - 1.0) / (rho + 1.0)).abs() < tol::EXACT);
         assert!((p.alpha_f - rho / (rho + 1.0)).abs() < tol::EXACT);
         assert!((p.gamma - (0.5 - p.alpha_m + p.alpha_f)).abs() < tol::EXACT);
         assert!((p.beta - 0.25 * (1.0 - p.alpha_m + p.alpha_f).powi(2)).abs() < tol::EXACT);
-        // Unconditional stability (Chung & Hulbert eq. (22)): α_m ≤ α_f ≤ ½, β ≥ ¼ + ½(α_f − α_m).
+        // Unconditional stability (Chung & Hulbert): α_m ≤ α_f ≤ ½, β ≥ ¼ + ½(α_f − α_m).
         assert!(p.alpha_m <= p.alpha_f && p.alpha_f <= 0.5);
         assert!(p.beta >= 0.25 + 0.5 * (p.alpha_f - p.alpha_m) - tol::EXACT);
     }

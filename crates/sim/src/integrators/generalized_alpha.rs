@@ -2,8 +2,8 @@
 //! spectral radius ρ∞.
 //!
 //! ODE: `M q̈ + D q̇ + f_int(q) = f_ext(t)` (f_int with the sign of a stiffness, on the
-//! left-hand side; `K_T = ∂f_int/∂q`). From ρ∞ ∈ [0, 1] (Chung & Hulbert, eqs. (25) and (17),
-//! (20)):
+//! left-hand side; `K_T = ∂f_int/∂q`). From ρ∞ ∈ [0, 1] (Chung & Hulbert 1993, §3: second
+//! order, and the roots at ωΔt → ∞ all equal to −ρ∞):
 //!
 //! ```text
 //! α_m = (2ρ∞ − 1)/(ρ∞ + 1),   α_f = ρ∞/(ρ∞ + 1),   γ = ½ − α_m + α_f,   β = ¼(1 − α_m + α_f)².
@@ -24,7 +24,7 @@
 //! `(1 − α_m) M a_{n+1} + α_m M a_n + (1 − α_f)(D v_{n+1} + f_int(q_{n+1})) + α_f (D v_n +
 //! f_int(q_n)) = (1 − α_f) f_ext(t_{n+1}) + α_f f_ext(t_n)`; for a linear model it is their
 //! `K q_{n+1−α_f}` form exactly (with the load interpolated in the same way). Written with
-//! `q̈` as the unknown (Arnold & Brüls 2007, eq. (9)) the step is the equation of motion at
+//! `q̈` as the unknown (Arnold & Brüls 2007) the step is the equation of motion at
 //! `t_{n+1}`, **residual** `R(q̈) = M q̈ + D v_{n+1}(q̈) + f_int(q_{n+1}(q̈)) − f_ext(t_{n+1})`
 //! (zero at the solution; `f_int` enters with a plus sign) with
 //!
@@ -58,7 +58,7 @@ use crate::{DynamicModel, SimError, State};
 pub const DEFAULT_RHO_INFINITY: f64 = 0.8;
 
 /// The parameters of the generalized-α method derived from the high-frequency spectral radius
-/// ρ∞ (Chung & Hulbert 1993, eqs. (25), (17), (20)); see the module docs.
+/// ρ∞ (Chung & Hulbert 1993, §3); see the module docs.
 ///
 /// ```
 /// use nurbspring_sim::integrators::GeneralizedAlphaParameters;
