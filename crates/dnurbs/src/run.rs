@@ -72,9 +72,14 @@ pub fn names(kinds: &[IntegratorKind]) -> String {
 
 impl DnurbsModel {
     /// The integrators a Kirchhoff–Love shell runs with: implicit with Newton on the
-    /// consistent tangent at every step.
-    pub const SHELL_INTEGRATORS: [IntegratorKind; 2] =
-        [IntegratorKind::Newmark, IntegratorKind::BackwardEuler];
+    /// consistent tangent at every step, or central differences (velocity Verlet) with the
+    /// consistent mass factored once, below the stability limit of the rest state.
+    pub const SHELL_INTEGRATORS: [IntegratorKind; 4] = [
+        IntegratorKind::Newmark,
+        IntegratorKind::GeneralizedAlpha,
+        IntegratorKind::BackwardEuler,
+        IntegratorKind::VelocityVerlet,
+    ];
 
     /// The integrators a D-NURBS runs with.
     pub const INTEGRATORS: [IntegratorKind; 3] = [

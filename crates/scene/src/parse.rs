@@ -107,6 +107,7 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
             "msm_integrator",
             "save_every",
             "probes",
+            "rho_infinity",
         ],
     ),
     (

@@ -253,6 +253,7 @@ pub fn simulate_dnurbs(
     let initial = scene.initial_conditions().state(&model);
     let mut opts = RunOptions::new(dt, t_end, integrator);
     opts.cancel = request.cancel.clone();
+    opts.rho_infinity = scene.simulation.rho_infinity;
     let steps = step_count(0.0, t_end, dt);
     let save_every = scene.simulation.save_every.max(1);
     let curve = matches!(model.geometry(), nurbspring_dnurbs::Geometry::Curve(_));

@@ -349,6 +349,9 @@ pub struct SimulationSpec {
     pub save_every: usize,
     /// Extra probe points `[u, v]` (curves: `[u]`); `(0.5, 0.5)` is always probed first.
     pub probes: Vec<Vec<f64>>,
+    /// Spectral radius at infinite frequency of the generalized-α scheme (0 ≤ ρ∞ ≤ 1,
+    /// default 0.8).
+    pub rho_infinity: f64,
 }
 
 impl Default for SimulationSpec {
@@ -360,6 +363,7 @@ impl Default for SimulationSpec {
             msm_integrator: IntegratorKind::SymplecticEuler,
             save_every: 1,
             probes: Vec::new(),
+            rho_infinity: nurbspring_sim::integrators::DEFAULT_RHO_INFINITY,
         }
     }
 }

@@ -1158,6 +1158,13 @@ fn check_simulation(
     if s.save_every == 0 {
         p.push("simulation.save_every", "0", "must be at least 1");
     }
+    if !(0.0..=1.0).contains(&s.rho_infinity) {
+        p.push(
+            "simulation.rho_infinity",
+            format_f64(s.rho_infinity),
+            "the spectral radius of generalized-α at infinite frequency must be in [0, 1]",
+        );
+    }
     if let Some(reason) = nurbspring_dnurbs::integrator_problem(s.dnurbs_integrator, m, d) {
         p.push(
             "simulation.dnurbs_integrator",

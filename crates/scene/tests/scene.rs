@@ -986,6 +986,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     ][mi],
                     save_every,
                     probes,
+                    rho_infinity: 0.8,
                 },
                 msm: MsmSpec {
                     grid: Some(

@@ -87,6 +87,14 @@ pub enum SimError {
         /// smallest step tried is `Δt / 2^halvings`; 0 when it was not retried).
         halvings: u32,
     },
+    /// The high-frequency spectral radius of generalized-α lies outside [0, 1].
+    #[error(
+        "invalid high-frequency spectral radius ρ∞ = {rho_infinity} for generalized-alpha (must lie in [0, 1])"
+    )]
+    InvalidSpectralRadius {
+        /// The rejected ρ∞.
+        rho_infinity: f64,
+    },
     /// A vector or matrix has the wrong size.
     #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
     DimensionMismatch {
@@ -111,15 +119,16 @@ pub enum SimError {
 }
 
 impl SimError {
-    /// Input problems: the time settings, an integrator that does not apply to the model, an
-    /// explicit scheme above its stability limit (the chosen Δt is the problem). Run failures:
-    /// divergence, a Newton failure, linear algebra. A size mismatch is a caller's bug: a run
-    /// failure.
+    /// Input problems: the time settings, generalized-α's ρ∞, an integrator that does not apply
+    /// to the model, an explicit scheme above its stability limit (the chosen Δt is the
+    /// problem). Run failures: divergence, a Newton failure, linear algebra. A size mismatch is
+    /// a caller's bug: a run failure.
     pub fn kind(&self) -> ErrorKind {
         match self {
             SimError::InvalidTimeStep { .. }
             | SimError::InvalidDuration { .. }
             | SimError::InvalidSubsteps
+            | SimError::InvalidSpectralRadius { .. }
             | SimError::TooManySteps { .. }
             | SimError::Unstable { .. }
             | SimError::NotSupported { .. } => ErrorKind::Input,

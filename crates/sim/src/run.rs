@@ -30,12 +30,21 @@ pub enum IntegratorKind {
     TerzopoulosQin,
     /// Newmark average acceleration (β = 1/4, γ = 1/2); energy conserving without damping.
     Newmark,
+    /// Generalized-α (Chung & Hulbert 1993) with the high-frequency spectral radius
+    /// [`RunOptions::rho_infinity`]; second order, unconditionally stable, damps the highest
+    /// frequencies by ρ∞ per step (ρ∞ = 1: Newmark's average acceleration).
+    GeneralizedAlpha,
     /// Exact modal solution of the undamped linear system (small models).
     Modal,
     /// Symplectic (semi-implicit) Euler; explicit.
     SymplecticEuler,
-    /// Velocity Verlet (= central difference); explicit.
-    #[serde(rename = "verlet", alias = "velocity-verlet")]
+    /// Velocity Verlet (= central difference); explicit. Also accepted as `velocity-verlet`
+    /// and `central-difference`.
+    #[serde(
+        rename = "verlet",
+        alias = "velocity-verlet",
+        alias = "central-difference"
+    )]
     VelocityVerlet,
     /// Classical fourth-order Runge–Kutta; explicit.
     Rk4,
@@ -45,9 +54,10 @@ pub enum IntegratorKind {
 
 impl IntegratorKind {
     /// Every integrator.
-    pub const ALL: [IntegratorKind; 7] = [
+    pub const ALL: [IntegratorKind; 8] = [
         IntegratorKind::TerzopoulosQin,
         IntegratorKind::Newmark,
+        IntegratorKind::GeneralizedAlpha,
         IntegratorKind::Modal,
         IntegratorKind::SymplecticEuler,
         IntegratorKind::VelocityVerlet,
@@ -60,6 +70,7 @@ impl IntegratorKind {
         match self {
             IntegratorKind::TerzopoulosQin => "terzopoulos-qin",
             IntegratorKind::Newmark => "newmark",
+            IntegratorKind::GeneralizedAlpha => "generalized-alpha",
             IntegratorKind::Modal => "modal",
             IntegratorKind::SymplecticEuler => "symplectic-euler",
             IntegratorKind::VelocityVerlet => "verlet",
@@ -68,17 +79,20 @@ impl IntegratorKind {
         }
     }
 
-    /// Parses a [`Self::name`] (also `velocity-verlet`; case and `_`/`-` insensitive).
+    /// Parses a [`Self::name`] (also `velocity-verlet` and `central-difference` for `verlet`;
+    /// case and `_`/`-` insensitive).
     pub fn parse(s: &str) -> Option<Self> {
         let s = s.trim().to_ascii_lowercase().replace('_', "-");
-        if s == "velocity-verlet" {
+        if s == "velocity-verlet" || s == "central-difference" {
             return Some(IntegratorKind::VelocityVerlet);
         }
         Self::ALL.into_iter().find(|k| k.name() == s)
     }
 
     /// True for the explicit schemes (symplectic Euler, Verlet, RK4), which are stable only
-    /// below `Δt_crit = 2/ω_max` and need a diagonal mass matrix.
+    /// below `Δt_crit = 2/ω_max`, `ω_max² = λ_max(K_T φ = λ M φ)`. They apply `M⁻¹` entrywise
+    /// to a diagonal (lumped) mass and by a sparse Cholesky factor, made once, to any other
+    /// (consistent) mass.
     pub fn is_explicit(self) -> bool {
         matches!(
             self,
@@ -135,6 +149,11 @@ pub struct RunOptions {
     pub newton_tolerance: f64,
     /// Newton iteration limit (default 30).
     pub max_newton_iterations: usize,
+    /// The high-frequency spectral radius ρ∞ ∈ [0, 1] of [`IntegratorKind::GeneralizedAlpha`]
+    /// (default [`crate::integrators::DEFAULT_RHO_INFINITY`] = 0.8; 1 is Newmark's average
+    /// acceleration, 0 annihilates the highest frequencies in one step). The other schemes
+    /// ignore it.
+    pub rho_infinity: f64,
     /// Runaway when `‖q − q₀‖∞ > factor · max(1, ‖q₀‖∞)` (default 1e6).
     pub divergence_factor: f64,
     /// When set (e.g. by Ctrl-C), the run stops after the current step.
@@ -143,11 +162,14 @@ pub struct RunOptions {
 
 impl RunOptions {
     /// Checks the time settings from `t0`: Δt positive and finite, t_end finite and not before
-    /// `t0`, at least one substep, at most [`MAX_STEPS`] steps (substeps counted). The one
-    /// place these rules live.
+    /// `t0`, at least one substep, at most [`MAX_STEPS`] steps (substeps counted); and, for
+    /// generalized-α, `0 ≤ ρ∞ ≤ 1`. The one place these rules live.
     pub fn validate(&self, t0: f64) -> Result<(), SimError> {
         if self.substeps == 0 {
             return Err(SimError::InvalidSubsteps);
+        }
+        if self.integrator == IntegratorKind::GeneralizedAlpha {
+            crate::integrators::GeneralizedAlphaParameters::from_rho_infinity(self.rho_infinity)?;
         }
         check_time(self.dt, self.t_end, t0)?;
         check_time(self.substep(), self.t_end, t0)
@@ -184,6 +206,7 @@ impl RunOptions {
             stability: None,
             newton_tolerance: 1e-10,
             max_newton_iterations: 30,
+            rho_infinity: crate::integrators::DEFAULT_RHO_INFINITY,
             divergence_factor: 1e6,
             cancel: None,
         }
@@ -264,7 +287,10 @@ pub struct StabilityLimit {
 /// `K_T(q) φ = λ M φ`, by Lanczos ([`largest_generalized_eigenvalue`], relative tolerance 1e-8) —
 /// and `Δt_crit = 2/ω_max`, the stability limit of the central-difference family (symplectic
 /// Euler and Verlet: exactly; RK4, whose limit is `2√2/ω_max`: conservatively). Damping is
-/// ignored (it only lowers the limit of symplectic Euler slightly).
+/// ignored (it only lowers the limit of symplectic Euler slightly). M is the model's mass as it
+/// is: a diagonal one enters the Lanczos operator `M⁻¹K_T` entrywise, any other (a consistent
+/// mass) through its sparse Cholesky factor, so the limit is that of the mass the explicit
+/// schemes step with.
 pub fn stability_limit(model: &dyn DynamicModel, q: &[f64]) -> Result<StabilityLimit, SimError> {
     let n = model.n_dofs();
     if q.len() != n {
@@ -293,6 +319,9 @@ pub fn stability_limit(model: &dyn DynamicModel, q: &[f64]) -> Result<StabilityL
 /// model's stiffness bound `K̄ ⪰ K_T(q)` ([`DynamicModel::stiffness_bound`]) and `2/ω̄`;
 /// `None` when the model has no bound. Since `K_T(q) ⪯ K̄` at every `q`, the linearization's
 /// largest frequency never exceeds `ω̄` ([`stability_limit`] gives it at one state only).
+/// The mass enters as in [`stability_limit`] (diagonal or consistent); when both `K̄` and M
+/// are of the form `S ⊗ I₃` the pencil of their factors is solved, which has the same
+/// eigenvalues.
 pub fn uniform_stability_limit(
     model: &dyn DynamicModel,
 ) -> Result<Option<StabilityLimit>, SimError> {

@@ -9,7 +9,7 @@ mod support;
 use std::sync::atomic::Ordering;
 
 use nurbspring_linalg::{SparseMatrix, SpdSolver};
-use nurbspring_sim::integrators::{BackwardEuler, Newmark, NewtonCounts};
+use nurbspring_sim::integrators::{BackwardEuler, GeneralizedAlpha, Newmark, NewtonCounts};
 use nurbspring_sim::*;
 use support::{Chain, DoubleWell, Duffing, Opaque, Prestressed, initial_positions, max_abs_diff};
 
@@ -435,6 +435,24 @@ fn a_step_on_which_newton_fails_is_two_steps_of_half_the_size() {
     nm_half.step(&model, &mut h2, dt / 2.0).unwrap();
     assert_eq!(nm.newton_counts().halved_steps, 2);
     assert_eq!((&s2.q, &s2.v), (&h2.q, &h2.v), "Newmark, second step");
+
+    // Generalized-α (ρ∞ = 0.8) carries two accelerations, a_n and q̈_n: after the halves both
+    // are those of the half-step scheme, so its next two steps are the same too.
+    let mut ga = GeneralizedAlpha::new(&model, &start, dt, 0.8, newton).unwrap();
+    let mut ga_half = GeneralizedAlpha::new(&model, &start, dt / 2.0, 0.8, newton).unwrap();
+    let (mut s, mut h) = whole_and_halves(&mut ga, &mut ga_half, dt);
+    assert_eq!(ga.newton_counts().halved_steps, 1);
+    assert_eq!(ga_half.newton_counts().halved_steps, 0);
+    assert_eq!((&s.q, &s.v), (&h.q, &h.v), "generalized-α");
+    assert_eq!(
+        (ga.acceleration(), ga.algorithmic_acceleration()),
+        (ga_half.acceleration(), ga_half.algorithmic_acceleration())
+    );
+    ga.step(&model, &mut s, dt).unwrap();
+    ga_half.step(&model, &mut h, dt / 2.0).unwrap();
+    ga_half.step(&model, &mut h, dt / 2.0).unwrap();
+    assert_eq!(ga.newton_counts().halved_steps, 2);
+    assert_eq!((&s.q, &s.v), (&h.q, &h.v), "generalized-α, second step");
 }
 
 /// When the halves fail too (no Newton iteration allowed: nothing converges), the error is
@@ -477,14 +495,15 @@ fn a_step_whose_halves_fail_too_reports_the_whole_step_and_leaves_the_state() {
 /// A step whose halves fail after the first of them succeeded leaves the carried state too as
 /// it was: a Duffing chain at rest under a small load that jumps to a large one after
 /// `t = 0.05`, one Newton iteration allowed, Δt = 0.1. The whole step fails (the large load),
-/// its first half (the small load) converges and moves Newmark's acceleration and backward
-/// Euler's guess, its second half fails at every halving. Stepped on after the error with
-/// the load kept small, each scheme must go on as a fresh one from the start, up to the
-/// Newton factor the failed attempts left behind (a kept factor is only an approximation of
-/// the Jacobian, by design): measured 0.9e-12 of the motion in q and 3.5e-12 in v, checked at
-/// 2e-11. An acceleration left
-/// at the first half's end would move Newmark's predictor by `Δt²/4 Δa`, about 1e-3 of the
-/// motion here; backward Euler's guess only moves Newton's start, within its tolerance.
+/// its first half (the small load) converges and moves Newmark's acceleration, generalized-α's
+/// two accelerations and backward Euler's guess, its second half fails at every halving.
+/// Stepped on after the error with the load kept small, each scheme must go on as a fresh one
+/// from the start, up to the Newton factor the failed attempts left behind (a kept factor is
+/// only an approximation of the Jacobian, by design): measured 1.0e-12 of the motion in q and
+/// 3.6e-12 in v, checked at 2e-11. An acceleration left at the first half's end would move
+/// Newmark's predictor by `Δt²/4 Δa`, about 1e-3 of the motion here (generalized-α with only
+/// `a_n` restored and `q̈_n` left: 9.7e-4); backward Euler's guess only moves Newton's start,
+/// within its tolerance.
 #[test]
 fn a_failed_step_leaves_no_trace_in_what_the_scheme_carries() {
     let c = Chain {
@@ -503,7 +522,7 @@ fn a_failed_step_leaves_no_trace_in_what_the_scheme_carries() {
     };
     let start = State::new(vec![0.0; 3], vec![0.0; 3]);
     let dt = 0.1;
-    let schemes = |_: ()| -> [(&str, Box<dyn Stepper>); 2] {
+    let schemes = |_: ()| -> [(&str, Box<dyn Stepper>); 3] {
         [
             (
                 "backward Euler",
@@ -512,6 +531,10 @@ fn a_failed_step_leaves_no_trace_in_what_the_scheme_carries() {
             (
                 "Newmark",
                 Box::new(Newmark::new(&jump, &start, dt, newton).unwrap()),
+            ),
+            (
+                "generalized-α",
+                Box::new(GeneralizedAlpha::new(&jump, &start, dt, 0.8, newton).unwrap()),
             ),
         ]
     };

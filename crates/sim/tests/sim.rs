@@ -77,6 +77,22 @@ fn integrator_names_round_trip() {
         Some(IntegratorKind::VelocityVerlet)
     );
     assert_eq!(IntegratorKind::parse("euler"), None);
+    // `central-difference` names Verlet (an alias, as in scenes); generalized-α by its name.
+    for (name, kind) in [
+        ("central-difference", IntegratorKind::VelocityVerlet),
+        ("Central_Difference", IntegratorKind::VelocityVerlet),
+        ("velocity-verlet", IntegratorKind::VelocityVerlet),
+        ("generalized-alpha", IntegratorKind::GeneralizedAlpha),
+    ] {
+        assert_eq!(IntegratorKind::parse(name), Some(kind), "{name}");
+        if !name.contains('_') && !name.contains('C') {
+            use serde::Deserialize;
+            let de = serde::de::value::StrDeserializer::<serde::de::value::Error>::new(name);
+            assert_eq!(IntegratorKind::deserialize(de).unwrap(), kind, "{name}");
+        }
+    }
+    assert_eq!(IntegratorKind::GeneralizedAlpha.name(), "generalized-alpha");
+    assert_eq!(IntegratorKind::VelocityVerlet.name(), "verlet");
     let explicit: Vec<_> = IntegratorKind::ALL
         .into_iter()
         .filter(|k| k.is_explicit())
@@ -145,9 +161,22 @@ fn invalid_inputs_are_rejected() {
         make_stepper(IntegratorKind::Modal, &damped, &s, 0.01),
         Err(SimError::NotSupported { .. })
     ));
+    // A consistent (non-diagonal) mass is factored by the explicit schemes and accepted by the
+    // implicit ones (tests/consistent_mass.rs); one that is not positive definite by none.
     let mut consistent = c.model();
     consistent.mass = SystemMatrix::Sparse(
         SparseMatrix::linear_combination(0.5, &SparseMatrix::identity(c.n), 0.01, &c.stiffness())
+            .unwrap(),
+    );
+    for kind in IntegratorKind::ALL {
+        if kind != IntegratorKind::Modal {
+            assert!(make_stepper(kind, &consistent, &s, 0.01).is_ok(), "{kind}");
+        }
+    }
+    run(&consistent, IntegratorKind::Newmark, &q0, &v0, 0.05, 0.5);
+    let mut indefinite = c.model();
+    indefinite.mass = SystemMatrix::Sparse(
+        SparseMatrix::linear_combination(0.5, &SparseMatrix::identity(c.n), -0.2, &c.stiffness())
             .unwrap(),
     );
     for kind in [
@@ -156,12 +185,10 @@ fn invalid_inputs_are_rejected() {
         IntegratorKind::Rk4,
     ] {
         assert!(matches!(
-            make_stepper(kind, &consistent, &s, 0.01),
+            make_stepper(kind, &indefinite, &s, 0.01),
             Err(SimError::NotSupported { .. })
         ));
     }
-    // ... but the implicit schemes accept a consistent mass.
-    run(&consistent, IntegratorKind::Newmark, &q0, &v0, 0.05, 0.5);
 }
 
 // ------------------------------------------------------------------ exact and energy

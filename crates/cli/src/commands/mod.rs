@@ -67,12 +67,15 @@ pub enum IntegratorChoice {
     TerzopoulosQin,
     /// Newmark average acceleration; unconditionally stable, no numerical damping.
     Newmark,
+    /// Generalized-α (rho_inf = 0.8); unconditionally stable, damps the highest frequencies
+    /// (neither model lists it yet: refused with the model's list).
+    GeneralizedAlpha,
     /// Backward Euler with Newton iterations (MSM); unconditionally stable, dissipative.
     BackwardEuler,
     /// Symplectic Euler (MSM); explicit: stable below dt_critical.
     SymplecticEuler,
     /// Velocity Verlet (MSM); explicit: stable below dt_critical.
-    #[value(alias = "velocity-verlet")]
+    #[value(alias = "velocity-verlet", alias = "central-difference")]
     Verlet,
     /// Classical Runge–Kutta (MSM); explicit: stable below dt_critical.
     Rk4,
@@ -85,6 +88,7 @@ impl From<IntegratorChoice> for IntegratorKind {
         match c {
             IntegratorChoice::TerzopoulosQin => IntegratorKind::TerzopoulosQin,
             IntegratorChoice::Newmark => IntegratorKind::Newmark,
+            IntegratorChoice::GeneralizedAlpha => IntegratorKind::GeneralizedAlpha,
             IntegratorChoice::BackwardEuler => IntegratorKind::BackwardEuler,
             IntegratorChoice::SymplecticEuler => IntegratorKind::SymplecticEuler,
             IntegratorChoice::Verlet => IntegratorKind::VelocityVerlet,

@@ -11,7 +11,7 @@
 //! First order, unconditionally stable, numerically dissipative.
 
 use super::NewtonSettings;
-use super::implicit::{CoreLadder, HalvableStep};
+use super::implicit::{CoreLadder, HalvableStep, StepCoefficients};
 use crate::{DynamicModel, SimError, State};
 
 /// Backward Euler stepper.
@@ -31,7 +31,7 @@ impl BackwardEuler {
         newton: NewtonSettings,
     ) -> Result<Self, SimError> {
         let n = model.n_dofs();
-        let cores = CoreLadder::new("backward-euler", model, dt, coefficients, newton)?;
+        let cores = CoreLadder::new("backward-euler", model, dt, COEFFICIENTS, newton)?;
         Ok(Self {
             cores,
             a: vec![0.0; n],
@@ -47,9 +47,10 @@ impl BackwardEuler {
 }
 
 /// `(c_q, c_v) = (h², h)`.
-fn coefficients(h: f64) -> (f64, f64) {
-    (h * h, h)
-}
+const COEFFICIENTS: StepCoefficients = StepCoefficients {
+    kappa_q: 1.0,
+    kappa_v: 1.0,
+};
 
 impl HalvableStep for BackwardEuler {
     fn substep(
@@ -83,8 +84,8 @@ impl HalvableStep for BackwardEuler {
         Ok(())
     }
 
-    fn carried(&mut self) -> &mut Vec<f64> {
-        &mut self.a
+    fn carried(&mut self) -> &mut [Vec<f64>] {
+        std::slice::from_mut(&mut self.a)
     }
 
     fn ladder(&self) -> &CoreLadder {

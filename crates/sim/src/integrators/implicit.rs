@@ -1,9 +1,11 @@
-//! The implicit core shared by Newmark and backward Euler.
+//! The implicit core shared by Newmark, generalized-α and backward Euler.
 //!
-//! Both schemes solve, for the end-of-step acceleration `a`,
+//! Each scheme solves, for the end-of-step acceleration `a`,
 //! `M a + D (v̂ + c_v a) + f_int(q̂ + c_q a) = f_ext(t_{n+1})`
-//! with predictors `q̂, v̂` and coefficients `(c_q, c_v)` = `(βΔt², γΔt)` (Newmark) or
-//! `(Δt², Δt)` (backward Euler, where `a = (v_{n+1} − v_n)/Δt`). The Newton matrix is
+//! with predictors `q̂, v̂` and coefficients `(c_q, c_v)` = `(κ_q Δt², κ_v Δt)`
+//! ([`StepCoefficients`]): `(β, γ)` for Newmark, `(β, γ)(1 − α_f)/(1 − α_m)` for
+//! generalized-α (where `a` is the acceleration of the equation of motion at `t_{n+1}`), `(1, 1)`
+//! for backward Euler (where `a = (v_{n+1} − v_n)/Δt`). The Newton matrix is
 //! `J = M + c_v D + c_q K_T(q̂ + c_q a)`. For a linear model J is constant: it is factored
 //! once and one solve is exact.
 //!
@@ -146,13 +148,30 @@ pub struct NewtonCounts {
 /// `Δt / 2^MAX_HALVINGS_OF_A_STEP`.
 pub(crate) const MAX_HALVINGS_OF_A_STEP: u32 = 6;
 
+/// The coefficients of a scheme's step equation for a step `h`: `c_q = κ_q h²`, `c_v = κ_v h`
+/// (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct StepCoefficients {
+    /// `κ_q`.
+    pub(crate) kappa_q: f64,
+    /// `κ_v`.
+    pub(crate) kappa_v: f64,
+}
+
+impl StepCoefficients {
+    /// `(c_q, c_v) = (κ_q h², κ_v h)`.
+    pub(crate) fn at(self, h: f64) -> (f64, f64) {
+        (self.kappa_q * h * h, self.kappa_v * h)
+    }
+}
+
 /// The implicit cores of one scheme for the step sizes `Δt / 2^l`, `l = 0, 1, …` (level `l`),
 /// each made when a step is first halved that far.
 pub(crate) struct CoreLadder {
     name: &'static str,
     dt: f64,
     /// `(c_q, c_v)` of the scheme for a step `h`.
-    coefficients: fn(f64) -> (f64, f64),
+    coefficients: StepCoefficients,
     newton: NewtonSettings,
     cores: Vec<ImplicitCore>,
     /// Steps begun (whole steps of `dt`; the step number in error reports).
@@ -166,10 +185,10 @@ impl CoreLadder {
         name: &'static str,
         model: &dyn DynamicModel,
         dt: f64,
-        coefficients: fn(f64) -> (f64, f64),
+        coefficients: StepCoefficients,
         newton: NewtonSettings,
     ) -> Result<Self, SimError> {
-        let (cq, cv) = coefficients(dt);
+        let (cq, cv) = coefficients.at(dt);
         let core = ImplicitCore::new(name, model, cq, cv, newton)?;
         Ok(Self {
             name,
@@ -195,7 +214,7 @@ impl CoreLadder {
     ) -> Result<&mut ImplicitCore, SimError> {
         while self.cores.len() <= level as usize {
             let h = self.h(self.cores.len() as u32);
-            let (cq, cv) = (self.coefficients)(h);
+            let (cq, cv) = self.coefficients.at(h);
             self.cores
                 .push(ImplicitCore::new(self.name, model, cq, cv, self.newton)?);
         }
@@ -227,9 +246,10 @@ pub(crate) trait HalvableStep {
         level: u32,
     ) -> Result<(), SimError>;
 
-    /// What the scheme carries from step to step besides the state (Newmark's acceleration),
-    /// saved before a halved step and restored when it fails.
-    fn carried(&mut self) -> &mut Vec<f64>;
+    /// What the scheme carries from step to step besides the state (Newmark's acceleration,
+    /// generalized-α's two accelerations), saved before a halved step and restored when it
+    /// fails.
+    fn carried(&mut self) -> &mut [Vec<f64>];
 
     fn ladder(&self) -> &CoreLadder;
 
@@ -276,7 +296,7 @@ pub(crate) fn step_with_halving(
         }) => (step, time, iterations, residual),
         other => return other,
     };
-    let (saved, carried) = (state.clone(), scheme.carried().clone());
+    let (saved, carried) = (state.clone(), scheme.carried().to_vec());
     let t_end = state.t + scheme.ladder().h(0);
     let mut deepest = 1;
     match halves(scheme, model, state, 1, &mut deepest) {
@@ -288,7 +308,7 @@ pub(crate) fn step_with_halving(
         }
         Err(_) => {
             *state = saved;
-            *scheme.carried() = carried;
+            scheme.carried().clone_from_slice(&carried);
             Err(SimError::NewtonFailed {
                 step,
                 time,

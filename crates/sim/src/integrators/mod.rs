@@ -8,25 +8,32 @@
 //! | scheme | kind | order | stability |
 //! |---|---|---|---|
 //! | [`TerzopoulosQin`] | implicit, linear models | 1 | unconditional, dissipative: `(1 + ω²Δt²)^{-1/2}` per step |
-//! | [`Newmark`] (β = ¼, γ = ½) | implicit | 2 | unconditional, energy conserving for D = 0 |
+//! | [`Newmark`] (β = ¼, γ = ½) | implicit, Newton | 2 | unconditional, energy conserving for D = 0 (linear; bounded O(Δt²) error when nonlinear) |
+//! | [`GeneralizedAlpha`] (ρ∞ ∈ [0, 1]) | implicit, Newton | 2 | unconditional; spectral radius → ρ∞ as ωΔt → ∞ (as `(ωΔt)^{-2/3}`); ρ∞ = 1 is Newmark |
 //! | [`Modal`] | exact (undamped linear) | exact | — |
 //! | [`SymplecticEuler`] | explicit | 1 | `Δt < 2/ω_max` |
-//! | [`VelocityVerlet`] | explicit | 2 | `Δt < 2/ω_max` |
+//! | [`VelocityVerlet`] (= central difference) | explicit | 2 | `Δt < 2/ω_max` |
 //! | [`Rk4`] | explicit | 4 | `Δt < 2√2/ω_max` (checked against `2/ω_max`) |
 //! | [`BackwardEuler`] | implicit, Newton | 1 | unconditional, dissipative |
 //!
-//! Explicit schemes need a diagonal (lumped) mass matrix and allocate nothing per step: all
-//! buffers live in the stepper.
+//! `ω_max² = λ_max(K_T φ = λ M φ)` with the model's mass as it is. The implicit Newton schemes
+//! share one core (`implicit.rs`: modified Newton on `M + c_v D + c_q K_T`, energy line search,
+//! step halving; linear models factor once). The explicit schemes apply `M⁻¹` by a
+//! [`MassInverse`]: entrywise for a diagonal (lumped) mass, by a sparse Cholesky factor made
+//! once for a consistent one; all buffers live in the stepper, and a step with a diagonal mass
+//! allocates nothing.
 
 mod backward_euler;
 mod explicit;
+mod generalized_alpha;
 mod implicit;
 mod modal;
 mod newmark;
 mod terzopoulos_qin;
 
 pub use backward_euler::BackwardEuler;
-pub use explicit::{Rk4, SymplecticEuler, VelocityVerlet};
+pub use explicit::{MassInverse, Rk4, SymplecticEuler, VelocityVerlet};
+pub use generalized_alpha::{DEFAULT_RHO_INFINITY, GeneralizedAlpha, GeneralizedAlphaParameters};
 pub use implicit::NewtonCounts;
 pub use modal::Modal;
 pub use newmark::Newmark;
@@ -67,7 +74,8 @@ pub fn make_stepper(
     make_stepper_with_options(kind, model, initial, &opts)
 }
 
-/// [`make_stepper`] with Δt (`opts.dt`) and the Newton settings taken from `opts`.
+/// [`make_stepper`] with Δt (`opts.dt`), the Newton settings and generalized-α's ρ∞ taken from
+/// `opts`.
 pub fn make_stepper_with_options(
     kind: IntegratorKind,
     model: &dyn DynamicModel,
@@ -86,6 +94,13 @@ pub fn make_stepper_with_options(
     Ok(match kind {
         IntegratorKind::TerzopoulosQin => Box::new(TerzopoulosQin::new(model, initial, dt)?),
         IntegratorKind::Newmark => Box::new(Newmark::new(model, initial, dt, newton)?),
+        IntegratorKind::GeneralizedAlpha => Box::new(GeneralizedAlpha::new(
+            model,
+            initial,
+            dt,
+            opts.rho_infinity,
+            newton,
+        )?),
         IntegratorKind::Modal => Box::new(Modal::new(model, dt)?),
         IntegratorKind::SymplecticEuler => Box::new(SymplecticEuler::new(model)?),
         IntegratorKind::VelocityVerlet => Box::new(VelocityVerlet::new(model, initial)?),
@@ -133,27 +148,6 @@ pub(crate) fn check_state_dims(model: &dyn DynamicModel, s: &State) -> Result<()
         check("damping matrix", d.dim())?;
     }
     Ok(())
-}
-
-/// The inverse of a diagonal mass matrix, or NotSupported for the explicit scheme `name`.
-pub(crate) fn inverse_diagonal_mass(
-    model: &dyn DynamicModel,
-    name: &'static str,
-) -> Result<Vec<f64>, SimError> {
-    let d = model
-        .mass()
-        .as_diagonal()
-        .ok_or_else(|| SimError::NotSupported {
-            integrator: name,
-            reason: "explicit schemes need a diagonal (lumped) mass matrix".into(),
-        })?;
-    if let Some(i) = d.iter().position(|&m| !(m > 0.0 && m.is_finite())) {
-        return Err(SimError::NotSupported {
-            integrator: name,
-            reason: format!("mass entry {i} is {}, not positive", d[i]),
-        });
-    }
-    Ok(d.iter().map(|m| 1.0 / m).collect())
 }
 
 /// Checks that a stepper built for `built` is called with the same step.

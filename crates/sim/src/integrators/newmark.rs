@@ -13,7 +13,7 @@
 use nurbspring_linalg::SpdSolver;
 
 use super::NewtonSettings;
-use super::implicit::{CoreLadder, HalvableStep};
+use super::implicit::{CoreLadder, HalvableStep, StepCoefficients};
 use crate::{DynamicModel, SimError, State};
 
 const BETA: f64 = 0.25;
@@ -60,7 +60,7 @@ impl Newmark {
         newton: NewtonSettings,
     ) -> Result<Self, SimError> {
         let n = model.n_dofs();
-        let cores = CoreLadder::new("newmark", model, dt, coefficients, newton)?;
+        let cores = CoreLadder::new("newmark", model, dt, COEFFICIENTS, newton)?;
         let a = initial_acceleration(model, initial)?;
         Ok(Self {
             cores,
@@ -78,9 +78,10 @@ impl Newmark {
 }
 
 /// `(c_q, c_v) = (βh², γh)`.
-fn coefficients(h: f64) -> (f64, f64) {
-    (BETA * h * h, GAMMA * h)
-}
+const COEFFICIENTS: StepCoefficients = StepCoefficients {
+    kappa_q: BETA,
+    kappa_v: GAMMA,
+};
 
 impl HalvableStep for Newmark {
     fn substep(
@@ -115,8 +116,8 @@ impl HalvableStep for Newmark {
         Ok(())
     }
 
-    fn carried(&mut self) -> &mut Vec<f64> {
-        &mut self.a
+    fn carried(&mut self) -> &mut [Vec<f64>] {
+        std::slice::from_mut(&mut self.a)
     }
 
     fn ladder(&self) -> &CoreLadder {
