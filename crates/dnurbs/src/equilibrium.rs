@@ -14,7 +14,7 @@ const MAX_HALVINGS: usize = 12;
 const RESIDUAL_HALVING: f64 = 0.5;
 
 /// An increment converged in at most this many Newton iterations lets the next grow by 1.5.
-const EASY_ITERATIONS: usize = 5;
+const EASY_ITERATIONS: usize = 6;
 /// An increment that needed at least this many halves the next.
 const HARD_ITERATIONS: usize = 12;
 
@@ -127,7 +127,7 @@ impl DnurbsModel {
     /// (the tangent at the last state, then the secant of the last two), Newton's method
     /// with the consistent tangent (Cholesky, LU once it is indefinite) and a backtracking line
     /// search on the total potential `E(q) − λ fᵀq − λ W(q)` whenever a full step raises the
-    /// residual. After at most 5 iterations the next increment grows by 1.5, after 12 or more
+    /// residual. After at most 6 iterations the next increment grows by 1.5, after 12 or more
     /// it is halved (never past the next recorded level); an increment that fails is halved
     /// and retried, down to `settings.min_increment`.
     /// `progress(λ)` is called after each increment; `cancel()` is polled between Newton

@@ -296,7 +296,10 @@ impl Scene {
         // dissection keeps the fill below n · band with band ≈ the shorter side times the
         // stencil width).
         let stencil = (2.0 * s.p + 1.0).min(s.n_u) * (2.0 * s.q + 1.0).min(s.n_v);
-        let coupled = if self.dnurbs.weights_as_dofs {
+        // Dofs of a control point coupled in the matrices: all of them with weights as
+        // unknowns and in the shell (whose tangent couples x, y and z), one for the tension
+        // plate's `S ⊗ I₃` pattern.
+        let coupled = if self.dnurbs.weights_as_dofs || self.material.shell().is_some() {
             s.d
         } else {
             1.0

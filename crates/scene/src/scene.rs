@@ -20,7 +20,7 @@
 //! "#;
 //! let scene = Scene::from_str(text, "string.toml").unwrap();
 //! assert!(matches!(scene.geometry, GeometrySpec::Curve(_)));
-//! assert_eq!(scene.material.mu, 2.0);
+//! assert_eq!(scene.material.tension_plate().unwrap().mu, 2.0);
 //! assert_eq!(scene.simulation.dt, 0.08); // default
 //!
 //! let err = Scene::from_str(&text.replace("mu = 2.0", "mu = -2.0"), "x.toml").unwrap_err();

@@ -96,7 +96,7 @@ const SLIT_ANNULAR: [(f64, f64, f64); 23] = [
 /// within 1 % of w_A and w_B.
 #[test]
 fn slit_annular_plate_follows_the_sze_table() {
-    let bench = obstacle::slit_annular_plate(3, (8, 64)).unwrap();
+    let bench = obstacle::slit_annular_plate(3, (6, 48)).unwrap();
     let model = &bench.model;
     let settings = PathSettings {
         levels: 40,

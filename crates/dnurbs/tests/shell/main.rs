@@ -4,5 +4,6 @@ mod support;
 
 mod analytic;
 mod derivatives;
+mod dynamics;
 mod large_deflection;
 mod obstacle;
