@@ -23,9 +23,24 @@ pub struct Benchmark {
     pub negate: bool,
     /// The reference value of the compared displacement.
     pub reference: f64,
+    /// The constraints the model was built with.
+    pub constraints: Constraints,
 }
 
 impl Benchmark {
+    /// The same benchmark with the discretization options `options` (e.g. a Gauss rule of
+    /// `p + 1` points, as Kratos integrates).
+    pub fn with_options(self, options: DnurbsOptions) -> Result<Self, DnurbsError> {
+        let model = DnurbsModel::kirchhoff_love(
+            self.model.geometry().clone(),
+            *self.model.shell().expect("a shell").material(),
+            self.model.loads().clone(),
+            &self.constraints,
+            options,
+        )?;
+        Ok(Self { model, ..self })
+    }
+
     /// The compared displacement at the state `p`.
     pub fn displacement(&self, p: &[f64]) -> Result<f64, DnurbsError> {
         let (u, v) = self.probe;
@@ -197,7 +212,8 @@ pub fn scordelis_lo(degree: usize, spans: usize) -> Result<Benchmark, DnurbsErro
         ..Constraints::default()
     };
     Ok(Benchmark {
-        model: model(s, material, loads, constraints)?,
+        model: model(s, material, loads, constraints.clone())?,
+        constraints,
         probe: (1.0, 0.0),
         component: 2,
         negate: true,
@@ -233,7 +249,8 @@ pub fn scordelis_lo_roof(degree: usize, spans: usize) -> Result<Benchmark, Dnurb
         }],
         ..Constraints::default()
     };
-    bench.model = model(s, material, loads, constraints)?;
+    bench.model = model(s, material, loads, constraints.clone())?;
+    bench.constraints = constraints;
     bench.probe = (0.5, 0.0);
     Ok(bench)
 }
@@ -273,7 +290,8 @@ pub fn pinched_cylinder(degree: usize, spans: usize) -> Result<Benchmark, Dnurbs
         ..Constraints::default()
     };
     Ok(Benchmark {
-        model: model(s, material, loads, constraints)?,
+        model: model(s, material, loads, constraints.clone())?,
+        constraints,
         probe: (0.0, 1.0),
         component: 2,
         negate: true,
@@ -324,7 +342,8 @@ pub fn hemisphere(degree: usize, spans: usize, force: f64) -> Result<Benchmark, 
         ..Constraints::default()
     };
     Ok(Benchmark {
-        model: model(s, material, loads, constraints)?,
+        model: model(s, material, loads, constraints.clone())?,
+        constraints,
         probe: (0.0, 0.0),
         component: 0,
         negate: false,
@@ -357,7 +376,8 @@ pub fn sze_cantilever(degree: usize, spans: usize) -> Result<Benchmark, DnurbsEr
         ..Constraints::default()
     };
     Ok(Benchmark {
-        model: model(s, material, loads, constraints)?,
+        model: model(s, material, loads, constraints.clone())?,
+        constraints,
         probe: (1.0, 0.5),
         component: 2,
         negate: false,
@@ -391,7 +411,8 @@ pub fn slit_annular_plate(degree: usize, spans: (usize, usize)) -> Result<Benchm
         ..Constraints::default()
     };
     Ok(Benchmark {
-        model: model(s, material, loads, constraints)?,
+        model: model(s, material, loads, constraints.clone())?,
+        constraints,
         probe: (1.0, 1.0),
         component: 2,
         negate: false,
