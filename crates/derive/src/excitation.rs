@@ -1,7 +1,8 @@
 //! The `excitation` derivation (docs/math.md §8.4): the modal fit refined on the D-NURBS modes
 //! that the scene's own initial velocity and loads excite. The masses are the reference
-//! masses times one scale; the unknowns are `log k_c` (of the classes the modal fit kept
-//! non-zero) and the log mass scale; the residuals, over the `q` most excited modes, are the
+//! masses times one scale; the unknowns are `log s_c`, one scale of the modal fit's element
+//! constants per element class, and the log mass scale; the residuals, over the `q` most
+//! excited modes, are the
 //! log ratio of each mode's frequency to that of the MSM mode of best MAC and the difference
 //! of their normalized shapes at the nodes, weighted by the square root of the mode's share of
 //! the motion. Levenberg–Marquardt from the modal fit, then the calibration of the lowest
@@ -15,7 +16,7 @@ use nurbspring_msm::{Class, Constants};
 
 use crate::DeriveError;
 use crate::evaluation::DnurbsModes;
-use crate::modal::{ModalSolution, combine, lowest_frequency};
+use crate::modal::{ModalSolution, lowest_frequency};
 use crate::nodes::NodeMap;
 use crate::outcome::ExcitationReport;
 use crate::validation::mac;
@@ -31,8 +32,8 @@ const ITERATIONS: usize = 40;
 
 /// The refined model.
 pub struct ExcitationSolution {
-    /// Constants by class.
-    pub constants: Constants,
+    /// The scale of the modal fit's element constants, by class.
+    pub scales: Constants,
     /// Calibrated masses of the free nodes.
     pub masses: Vec<f64>,
     /// The report.
@@ -78,15 +79,17 @@ fn highest_frequency(l: &SparseMatrix, masses: &[f64]) -> f64 {
     lambda.sqrt()
 }
 
-/// The excitation-aware refinement of `modal`.
+/// The excitation-aware refinement of `modal`: `classes` with `stiffness`, each class's
+/// stiffness on the free nodes with the modal fit's element constants.
 pub fn excitation_fit(
     modes: &DnurbsModes,
     map: &NodeMap,
     classes: &[Class],
-    units: &[SparseMatrix],
+    stiffness: &[SparseMatrix],
     modal: &ModalSolution,
     reference: &[f64],
 ) -> Result<ExcitationSolution, DeriveError> {
+    let units = stiffness;
     let sys = &modes.system;
     let basis = &modes.basis;
     // Each mode's oscillation amplitude from the initial state and the load.
@@ -132,12 +135,12 @@ pub fn excitation_fit(
         .map(|&(i, a2)| (basis.omega[i], map.at_nodes(&basis.mode(i)), a2 / total))
         .collect();
     let active: Vec<usize> = (0..classes.len())
-        .filter(|&c| modal.constants.value(classes[c]) > 0.0 && units[c].frobenius_norm() > 0.0)
+        .filter(|&c| units[c].frobenius_norm() > 0.0)
         .collect();
     let active_units: Vec<&SparseMatrix> = active.iter().map(|&c| &units[c]).collect();
     let n = reference.len();
     let count = (2 * EXCITED_MODES).min(n);
-    // θ = (log k_c, log s); masses s · m̄.
+    // θ = (log s_c, log s); masses s · m̄.
     let residual = |theta: &[f64]| -> Result<Vec<f64>, DeriveError> {
         let k: Vec<f64> = theta[..active.len()].iter().map(|t| t.exp()).collect();
         let s = theta[active.len()].exp();
@@ -161,10 +164,7 @@ pub fn excitation_fit(
         }
         Ok(r)
     };
-    let mut theta: Vec<f64> = active
-        .iter()
-        .map(|&c| modal.constants.value(classes[c]).ln())
-        .collect();
+    let mut theta: Vec<f64> = vec![0.0; active.len()];
     // The modal masses are m̄-like: start from their mean ratio to m̄.
     let s0 = modal
         .masses
@@ -238,31 +238,38 @@ pub fn excitation_fit(
     let omega1_dnurbs = modal.report.omega1_dnurbs;
     let mass_scale = (omega1 / omega1_dnurbs).powi(2);
     masses.iter_mut().for_each(|m| *m *= mass_scale);
-    let mut constants = Constants::new();
+    let mut scales = Constants::new();
     for &c in classes {
-        constants.set(c, 0.0);
+        scales.set(c, 0.0);
     }
     for (&c, &kc) in active.iter().zip(&k) {
-        constants.set(classes[c], kc);
+        scales.set(classes[c], kc);
     }
+    let modal_constants = &modal.report.constants;
+    let constants = Constants::from_pairs(
+        classes
+            .iter()
+            .map(|&c| (c, scales.value(c) * modal_constants.value(c))),
+    );
     let l_modal = combine(
         &units.iter().collect::<Vec<_>>(),
-        &modal.constants.values_of(classes),
+        &vec![1.0; units.len()],
         n,
     )?;
     let dt_modal = 2.0 / highest_frequency(&l_modal, &modal.masses);
     let dt_here = 2.0 / highest_frequency(&l, &masses);
+    let refined: Vec<Class> = active.iter().map(|&c| classes[c]).collect();
     let warnings = overfit_warnings(
-        &active.iter().map(|&c| classes[c]).collect::<Vec<_>>(),
-        &k,
-        &modal.constants,
+        &refined,
+        &refined.iter().map(|&c| constants.value(c)).collect::<Vec<_>>(),
+        modal_constants,
         (dt_modal, dt_here),
     );
     Ok(ExcitationSolution {
         report: ExcitationReport {
-            classes: active.iter().map(|&c| classes[c]).collect(),
-            constants: constants.clone(),
-            modal_constants: modal.constants.clone(),
+            classes: refined,
+            constants,
+            modal_constants: modal_constants.clone(),
             modes: amplitude
                 .iter()
                 .map(|&(i, a2)| (i + 1, a2 / total))
@@ -272,7 +279,7 @@ pub fn excitation_fit(
             mass_scale,
             dt_critical: (dt_modal, dt_here),
         },
-        constants,
+        scales,
         masses,
         warnings,
     })
@@ -303,6 +310,15 @@ fn overfit_warnings(
         ));
     }
     warnings
+}
+
+/// `Σ_c k_c L_c`.
+fn combine(units: &[&SparseMatrix], k: &[f64], n: usize) -> Result<SparseMatrix, DeriveError> {
+    let mut acc = SparseMatrix::zeros(n, n);
+    for (u, &kc) in units.iter().zip(k) {
+        acc = SparseMatrix::linear_combination(1.0, &acc, kc, u)?;
+    }
+    Ok(acc)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

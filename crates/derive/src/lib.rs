@@ -63,8 +63,10 @@ pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use linear::derive_linear;
 pub use mass::{distinct_non_null, mass_eigenvalues};
 pub use modal::{
-    MASS_FLOOR, MASS_REGULARIZATION, MODES, ModalFitReport, ModalSolution, SampledMode,
-    lowest_frequency, modal_fit,
+    Band, CONSTANT_REGULARIZATION, ElementPrior, FITTED_MODES, FREQUENCY_WEIGHT, FitGroup,
+    GroupFit, MASS_FLOOR, MASS_REGULARIZATION, MIN_HALF_WAVES, ModalFitReport, ModalSolution,
+    RINGS, SampledMode, TOTAL_MASS_WEIGHT, element_priors, lowest_frequency, modal_fit,
+    resolved_modes,
 };
 pub use modal_solution::{DENSE_MODES, ModalBasis, TRUNCATED_MODES};
 pub use omega::{NodeState, Omega};

@@ -331,11 +331,12 @@ pub struct TrustRegionReport {
 /// What the excitation-aware fit reports.
 #[derive(Clone, Debug, Serialize)]
 pub struct ExcitationReport {
-    /// The classes refined.
+    /// The classes refined (each element's constant is the modal fit's times its class's
+    /// scale).
     pub classes: Vec<Class>,
-    /// Their constants.
+    /// The mean element constant of each class.
     pub constants: Constants,
-    /// The modal fit it started from.
+    /// The same of the modal fit it started from.
     pub modal_constants: Constants,
     /// The D-NURBS modes weighted (1 = lowest) and their shares of the motion.
     pub modes: Vec<(usize, f64)>,
