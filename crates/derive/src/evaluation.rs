@@ -12,7 +12,7 @@ use crate::outcome::{FrequencyRow, MassReport, ProbeError, Validation};
 use crate::reference::{ReferenceKind, Watch, run_scalar, scalar_rows};
 use crate::scalar::{EnergyOrigin, ScalarSystem};
 use crate::setup::{Method, Setup};
-use crate::validation::{compare, compare_points, energy_drift, mac};
+use crate::validation::{compare, compare_points, energy_drift, match_modes};
 use crate::{DeriveError, Trajectory};
 
 /// The validation horizon covers at least this many periods of the lowest mode.
@@ -28,6 +28,11 @@ pub const WARN_MASS_FACTOR: f64 = 2.0;
 pub const WARN_TRUNCATION: f64 = 0.01;
 /// Distinct frequencies listed in the frequency table.
 pub const TABLE_MODES: usize = 8;
+/// The MSM modes searched for the match of a D-NURBS mode: the lowest this many times
+/// [`TABLE_MODES`].
+pub const MATCH_WINDOW: usize = 3;
+/// A matched low mode whose frequency is off by more than this (relative) is reported.
+pub const WARN_MODE_FREQUENCY: f64 = 0.05;
 
 /// `max(t_end, PERIODS · 2π/ω₁)`.
 pub fn horizon(t_end: f64, omega1: f64) -> f64 {
@@ -287,28 +292,54 @@ pub fn dnurbs_impulse_run(
     run_scalar(&sys, &modes.basis, &dnurbs_watch(setup, &sys), times, dt)
 }
 
-/// The lowest distinct frequencies of both models with the MAC of their shapes at the free
-/// nodes (`omega_ff`: scalar Ω of the free nodes on the free control points; `msm` a basis
-/// over the free nodes).
+/// The lowest D-NURBS modes, each with the MSM mode matched to it by MAC at the free nodes
+/// ([`match_modes`]: a repeated frequency as a subspace) among the MSM's lowest
+/// `MATCH_WINDOW × TABLE_MODES` (`omega_ff`: scalar Ω of the free nodes on the free control
+/// points; `msm` a basis over the free nodes). A D-NURBS mode left without a match is not
+/// listed.
 pub fn frequency_table(
     dn: &ModalBasis,
     omega_ff: &SparseMatrix,
     msm: &ModalBasis,
 ) -> Vec<FrequencyRow> {
-    let count = TABLE_MODES.min(dn.len()).min(msm.len());
-    (0..count)
-        .map(|i| {
-            let phi = dn.mode(i);
+    let elastic: Vec<usize> = (0..dn.len()).filter(|&i| dn.omega[i] > 0.0).collect();
+    let mut count = TABLE_MODES.min(elastic.len());
+    // A repeated frequency is listed whole.
+    while count < elastic.len()
+        && (dn.omega[elastic[count]] - dn.omega[elastic[count - 1]]).abs()
+            <= crate::validation::REPEATED_FREQUENCY * dn.omega[elastic[count]]
+    {
+        count += 1;
+    }
+    let picked = &elastic[..count];
+    let reference: Vec<Vec<f64>> = picked
+        .iter()
+        .map(|&i| {
             let mut at_nodes = vec![0.0; omega_ff.nrows()];
-            omega_ff.mul_vec(&phi, &mut at_nodes);
-            let (a, b) = (dn.omega[i], msm.omega[i]);
-            FrequencyRow {
+            omega_ff.mul_vec(&dn.mode(i), &mut at_nodes);
+            at_nodes
+        })
+        .collect();
+    let omega: Vec<f64> = picked.iter().map(|&i| dn.omega[i]).collect();
+    let window: Vec<usize> = (0..msm.len())
+        .filter(|&j| msm.omega[j] > 0.0)
+        .take(MATCH_WINDOW * TABLE_MODES)
+        .collect();
+    let candidates: Vec<Vec<f64>> = window.iter().map(|&j| msm.mode(j)).collect();
+    match_modes(&reference, &omega, &candidates)
+        .into_iter()
+        .zip(picked)
+        .filter_map(|(m, &i)| {
+            let (j, mac) = m?;
+            let (a, b) = (dn.omega[i], msm.omega[window[j]]);
+            Some(FrequencyRow {
                 mode: i + 1,
                 dnurbs: a,
+                msm_mode: window[j] + 1,
                 msm: b,
                 relative_difference: if a > 0.0 { b / a - 1.0 } else { f64::NAN },
-                mac: Some(mac(&at_nodes, &msm.mode(i))),
-            }
+                mac: Some(mac),
+            })
         })
         .collect()
 }
@@ -398,6 +429,22 @@ pub fn warnings(
             first.msm,
             first.dnurbs
         ));
+    }
+    for row in frequencies.iter().skip(1) {
+        if above(row.relative_difference.abs(), WARN_MODE_FREQUENCY) {
+            out.push(format!(
+                "D-NURBS mode {} ({:.6} rad/s) is matched by MAC ({}) to MSM mode {} at \
+                 {:.6} rad/s, {:+.1}% off (above {:.0}%)",
+                row.mode,
+                row.dnurbs,
+                row.mac
+                    .map_or_else(|| "by rank".to_string(), |m| format!("{m:.3}")),
+                row.msm_mode,
+                row.msm,
+                pct(row.relative_difference),
+                pct(WARN_MODE_FREQUENCY)
+            ));
+        }
     }
     let ratio = mass.free_msm / mass.free_dnurbs;
     if !(1.0 / WARN_MASS_FACTOR..=WARN_MASS_FACTOR).contains(&ratio) {

@@ -57,7 +57,8 @@ mod validation;
 
 pub use error::DeriveError;
 pub use evaluation::{
-    DnurbsModes, PERIODS, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, horizon,
+    DnurbsModes, MATCH_WINDOW, PERIODS, TABLE_MODES, WARN_FREQUENCY, WARN_MASS_FACTOR,
+    WARN_MODE_FREQUENCY, WARN_RELATIVE_RMS, horizon,
 };
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use linear::derive_linear;
@@ -85,4 +86,7 @@ pub use scalar::{EnergyOrigin, ScalarSystem};
 pub use setup::{
     Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Method, Setup, TimeSettings,
 };
-pub use validation::{Comparison, Trajectory, compare, compare_points, dominant_period, mac};
+pub use validation::{
+    Comparison, REPEATED_FREQUENCY, Trajectory, compare, compare_points, dominant_period, mac,
+    match_modes,
+};

@@ -186,11 +186,14 @@ pub struct Spectrum {
 /// their shapes are at the nodes.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrequencyRow {
-    /// Mode number, 1 = lowest.
+    /// D-NURBS mode number, 1 = lowest.
     pub mode: usize,
     /// D-NURBS angular frequency.
     pub dnurbs: f64,
-    /// MSM angular frequency of the same rank.
+    /// The MSM mode matched to it (by MAC where the MSM's modes are isotropic triplets,
+    /// else by rank), 1 = lowest.
+    pub msm_mode: usize,
+    /// Its angular frequency.
     pub msm: f64,
     /// `msm / dnurbs − 1`.
     pub relative_difference: f64,

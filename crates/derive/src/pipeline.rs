@@ -623,6 +623,7 @@ fn paper_frequencies(spectrum: &Spectrum) -> Vec<FrequencyRow> {
         .map(|(i, (&d, &m))| FrequencyRow {
             mode: i + 1,
             dnurbs: d,
+            msm_mode: i + 1,
             msm: m,
             relative_difference: m / d - 1.0,
             mac: None,
