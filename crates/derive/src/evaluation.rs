@@ -8,7 +8,7 @@ use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::State;
 
 use crate::modal_solution::{DENSE_MODES, ModalBasis};
-use crate::outcome::{FrequencyRow, MassReport, ProbeError, Validation};
+use crate::outcome::{FrequencyRow, MassReport, ProbeError, Regime, Validation};
 use crate::reference::{ReferenceKind, Watch, run_scalar, scalar_rows};
 use crate::scalar::{EnergyOrigin, ScalarSystem};
 use crate::setup::{Method, Setup};
@@ -33,6 +33,15 @@ pub const TABLE_MODES: usize = 8;
 pub const MATCH_WINDOW: usize = 3;
 /// A matched low mode whose frequency is off by more than this (relative) is reported.
 pub const WARN_MODE_FREQUENCY: f64 = 0.05;
+/// The modes compared for the regime's frequency bound.
+pub const REGIME_MODES: usize = 100;
+/// The regime's frequency bound: matched modes within this relative error.
+pub const REGIME_FREQUENCY: f64 = 0.01;
+/// The linear range: displacements up to this share of the surface's size. Both models are
+/// linear in the displacement; a displacement w over a size L strains a sheet by about
+/// `(w/L)²/2` beyond what they count (0.5% at this bound), and turns it so far that loads
+/// and stiffness no longer act along the rest shape's directions.
+pub const LINEAR_RANGE: f64 = 0.1;
 
 /// `max(t_end, PERIODS · 2π/ω₁)`.
 pub fn horizon(t_end: f64, omega1: f64) -> f64 {
@@ -302,8 +311,19 @@ pub fn frequency_table(
     omega_ff: &SparseMatrix,
     msm: &ModalBasis,
 ) -> Vec<FrequencyRow> {
+    matched_modes(dn, omega_ff, msm, TABLE_MODES)
+}
+
+/// The lowest `count` elastic D-NURBS modes (a repeated frequency completed) with the MSM
+/// modes matched to them by MAC among the MSM's lowest `MATCH_WINDOW × count`.
+pub fn matched_modes(
+    dn: &ModalBasis,
+    omega_ff: &SparseMatrix,
+    msm: &ModalBasis,
+    count: usize,
+) -> Vec<FrequencyRow> {
     let elastic: Vec<usize> = (0..dn.len()).filter(|&i| dn.omega[i] > 0.0).collect();
-    let mut count = TABLE_MODES.min(elastic.len());
+    let mut count = count.min(elastic.len());
     // A repeated frequency is listed whole.
     while count < elastic.len()
         && (dn.omega[elastic[count]] - dn.omega[elastic[count - 1]]).abs()
@@ -323,7 +343,7 @@ pub fn frequency_table(
     let omega: Vec<f64> = picked.iter().map(|&i| dn.omega[i]).collect();
     let window: Vec<usize> = (0..msm.len())
         .filter(|&j| msm.omega[j] > 0.0)
-        .take(MATCH_WINDOW * TABLE_MODES)
+        .take(MATCH_WINDOW * count)
         .collect();
     let candidates: Vec<Vec<f64>> = window.iter().map(|&j| msm.mode(j)).collect();
     match_modes(&reference, &omega, &candidates)
@@ -342,6 +362,57 @@ pub fn frequency_table(
             })
         })
         .collect()
+}
+
+/// The regime a derived model may be used in (docs/math.md §8.7): the frequencies up to
+/// which the D-NURBS modes, in ascending order, each have a matched MSM mode within
+/// [`REGIME_FREQUENCY`] (`rows`: the matched modes, ascending), and the displacements up to
+/// [`LINEAR_RANGE`] of the surface's size (the diagonal of its lattice's bounding box at
+/// rest), beside the largest displacement the D-NURBS makes at the probes in `reference`.
+pub fn regime(setup: &Setup, reference: &Trajectory, rows: &[FrequencyRow]) -> Regime {
+    let mut frequency = 0.0;
+    let mut modes = 0;
+    for r in rows {
+        if r.relative_difference.abs() > REGIME_FREQUENCY || r.relative_difference.is_nan() {
+            break;
+        }
+        frequency = r.dnurbs;
+        modes += 1;
+    }
+    let positions = &setup.lattice().positions;
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in positions {
+        for x in 0..3 {
+            lo[x] = lo[x].min(p[x]);
+            hi[x] = hi[x].max(p[x]);
+        }
+    }
+    let size = (0..3).map(|x| (hi[x] - lo[x]).powi(2)).sum::<f64>().sqrt();
+    let motion = reference
+        .probes
+        .iter()
+        .filter_map(|probe| {
+            let start = probe.first()?;
+            Some(
+                probe
+                    .iter()
+                    .map(|x| {
+                        ((x[0] - start[0]).powi(2)
+                            + (x[1] - start[1]).powi(2)
+                            + (x[2] - start[2]).powi(2))
+                        .sqrt()
+                    })
+                    .fold(0.0, f64::max),
+            )
+        })
+        .fold(0.0, f64::max);
+    Regime {
+        frequency,
+        modes,
+        size,
+        amplitude: LINEAR_RANGE * size,
+        motion,
+    }
 }
 
 /// Each value three times (x, y, z), ascending.
@@ -394,9 +465,21 @@ pub fn warnings(
     frequencies: &[crate::outcome::FrequencyRow],
     mass: &MassReport,
     clamped: &[String],
+    regime: &Regime,
 ) -> Vec<String> {
     let mut out = Vec::new();
     let pct = |x: f64| 100.0 * x;
+    if regime.motion > regime.amplitude {
+        out.push(format!(
+            "the scene's own motion reaches {:.4} at the probes, {:.0}% of the surface's size \
+             {:.4} (linear range: {:.0}%): the D-NURBS and the MSM are linear models, so their \
+             agreement here says nothing of so large a motion",
+            regime.motion,
+            pct(regime.motion / regime.size),
+            regime.size,
+            pct(LINEAR_RANGE)
+        ));
+    }
     // NaN (no motion to compare) counts as a bad sign too.
     let above = |x: f64, limit: f64| x.is_nan() || x > limit;
     if validation.dnurbs_amplitude == 0.0 {

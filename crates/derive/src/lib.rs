@@ -57,8 +57,9 @@ mod validation;
 
 pub use error::DeriveError;
 pub use evaluation::{
-    DnurbsModes, MATCH_WINDOW, PERIODS, TABLE_MODES, WARN_FREQUENCY, WARN_MASS_FACTOR,
-    WARN_MODE_FREQUENCY, WARN_RELATIVE_RMS, horizon,
+    DnurbsModes, LINEAR_RANGE, MATCH_WINDOW, PERIODS, REGIME_FREQUENCY, REGIME_MODES,
+    TABLE_MODES, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_MODE_FREQUENCY, WARN_RELATIVE_RMS,
+    horizon,
 };
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use linear::derive_linear;
@@ -73,7 +74,7 @@ pub use modal_solution::{DENSE_MODES, ModalBasis, TRUNCATED_MODES};
 pub use omega::{NodeState, Omega};
 pub use outcome::{
     Derivation, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport,
-    ModalTruncation, NodeReduction, ParameterSet, ProbeError, ReductionReport, Spectrum,
+    ModalTruncation, NodeReduction, ParameterSet, ProbeError, ReductionReport, Regime, Spectrum,
     TrustRegionReport, Validation,
 };
 pub use pipeline::{

@@ -11,8 +11,8 @@ use nurbspring_msm::{Class, Constants, SpringLattice};
 
 use crate::DeriveError;
 use crate::evaluation::{
-    DnurbsModes, frequency_table, impulse, initial_speed, node_watch, triplicate, unloaded,
-    validation, warnings, with_totals,
+    DnurbsModes, REGIME_MODES, frequency_table, impulse, initial_speed, matched_modes,
+    node_watch, regime, triplicate, unloaded, validation, warnings, with_totals,
 };
 use crate::excitation::excitation_fit;
 use crate::modal::{FITTED_MODES, SampledMode, element_priors, modal_fit};
@@ -574,6 +574,11 @@ pub fn derive_linear(
         judge.dt,
     );
     let frequencies = frequency_table(&modes.basis, &map.omega_ff, &node.basis);
+    let regime = regime(
+        &setup,
+        &reference.0,
+        &matched_modes(&modes.basis, &map.omega_ff, &node.basis, REGIME_MODES),
+    );
     let spectrum = Spectrum {
         dnurbs: triplicate(&modes.basis.omega),
         msm: triplicate(&node.basis.omega),
@@ -633,6 +638,7 @@ pub fn derive_linear(
         &frequencies,
         &mass,
         &[],
+        &regime,
     ));
     let derivation = Derivation {
         method,
@@ -645,6 +651,7 @@ pub fn derive_linear(
         given_trajectory: None,
         second_excitation,
         frequencies,
+        regime,
         probes: setup.probes().to_vec(),
         probe_nodes: setup.probe_nodes().to_vec(),
         dnurbs_trajectory: reference.0,

@@ -31,6 +31,8 @@ use serde::Serialize;
 
 use crate::DeriveError;
 use crate::fnnls::BlockQp;
+use crate::modal_solution::ModalBasis;
+use crate::validation::match_modes;
 
 /// Lines from each edge of the lattice whose elements form groups of their own: the
 /// Greville abscissae of a cubic are uneven over the first three, and a clamp (two fixed
@@ -58,6 +60,9 @@ pub const MASS_REGULARIZATION: f64 = 1e-2;
 /// move the nodes, so the fit could drive their masses towards zero, which shrinks the
 /// explicit step limit without helping the fit.
 pub const MASS_FLOOR: f64 = 0.1;
+/// The fitted set is widened (one half-wave more along u or v) only while the MSM still
+/// reproduces every fitted mode to this relative frequency error.
+pub const ACCEPTED_MODE_ERROR: f64 = 1e-3;
 /// Two modes whose frequencies differ by less than this (relative) are one repeated
 /// frequency: they are fitted together or not at all.
 pub const REPEATED: f64 = 1e-6;
@@ -176,6 +181,9 @@ pub struct ModalFitReport {
     pub omega1_fitted: f64,
     /// The calibration factor `(ω₁^S/ω₁^D)²` applied to every mass.
     pub mass_scale: f64,
+    /// The largest relative frequency error, after the calibration, of a fitted mode against
+    /// the MSM mode matched to it by MAC.
+    pub worst_fitted_mode: f64,
 }
 
 /// The fitted element constants and free-node masses.
@@ -357,30 +365,46 @@ fn half_waves(grid: (usize, usize), position: &[usize], shape: &[f64]) -> [usize
     [along_u + 1, along_v + 1]
 }
 
+/// The free lines of the lattice along u and v.
+fn free_lines(grid: (usize, usize), free: &[usize]) -> [usize; 2] {
+    let (n_u, n_v) = grid;
+    let (mut lines_u, mut lines_v) = (vec![false; n_u], vec![false; n_v]);
+    for &a in free {
+        lines_u[a / n_v] = true;
+        lines_v[a % n_v] = true;
+    }
+    let count = |lines: &[bool]| lines.iter().filter(|&&f| f).count();
+    [count(&lines_u), count(&lines_v)]
+}
+
 /// The modes the lattice resolves, by rank in `modes` (ascending frequency): at most
 /// `K_u` half-waves along u and `K_v` along v, `K = max(⌈(N + 1)/2⌉, min(N, MIN_HALF_WAVES))`
 /// with N the free lines in that direction (a wave of `⌈(N + 1)/2⌉` half-waves has four
-/// nodes per wavelength), until `min(K_u K_v, FITTED_MODES)` are taken. A repeated frequency
-/// (within [`REPEATED`]) is taken whole or not at all: its modes are any rotation of the
-/// repeated pair, so each must pass. Returns the ranks and `[K_u, K_v]`.
+/// nodes per wavelength), until `min(K_u K_v, FITTED_MODES)` are taken ([`modes_within`]).
+/// Returns the ranks and `[K_u, K_v]`.
 pub fn resolved_modes(
     grid: (usize, usize),
     free: &[usize],
     modes: &[SampledMode],
 ) -> (Vec<usize>, [usize; 2]) {
-    let (n_u, n_v) = grid;
-    let mut position = vec![usize::MAX; n_u * n_v];
-    let (mut lines_u, mut lines_v) = (vec![false; n_u], vec![false; n_v]);
+    let k = free_lines(grid, free).map(|n| (n + 1).div_ceil(2).max(n.min(MIN_HALF_WAVES)));
+    (modes_within(grid, free, modes, k), k)
+}
+
+/// The lowest modes of `modes` (by rank) with at most `k[0]` half-waves along u and `k[1]`
+/// along v, until `min(k[0] k[1], FITTED_MODES)` are taken. A repeated frequency (within
+/// [`REPEATED`]) is taken whole or not at all: its modes are any rotation of the repeated
+/// pair, so each must pass.
+pub fn modes_within(
+    grid: (usize, usize),
+    free: &[usize],
+    modes: &[SampledMode],
+    k: [usize; 2],
+) -> Vec<usize> {
+    let mut position = vec![usize::MAX; grid.0 * grid.1];
     for (p, &a) in free.iter().enumerate() {
         position[a] = p;
-        lines_u[a / n_v] = true;
-        lines_v[a % n_v] = true;
     }
-    let bound = |lines: &[bool]| {
-        let n = lines.iter().filter(|&&f| f).count();
-        (n + 1).div_ceil(2).max(n.min(MIN_HALF_WAVES))
-    };
-    let k = [bound(&lines_u), bound(&lines_v)];
     let count = (k[0] * k[1]).min(FITTED_MODES);
     let mut out: Vec<usize> = Vec::new();
     let mut start = 0;
@@ -400,7 +424,7 @@ pub fn resolved_modes(
         }
         start = end;
     }
-    (out, k)
+    out
 }
 
 /// One element in the fit: its group, `σ_e w_e`, and its (free node, coefficient) pairs.
@@ -422,7 +446,6 @@ pub fn modal_fit(
     candidates: &[SampledMode],
     reference: &[f64],
 ) -> Result<ModalSolution, DeriveError> {
-    let n = free.len();
     let refused = |reason: &str| DeriveError::InvalidOption {
         name: "fit.derivation",
         value: "\"modal\"".into(),
@@ -477,8 +500,85 @@ pub fn modal_fit(
             reason: "no element acts on a free node, or the material has no stiffness".into(),
         });
     }
+    let problem = Problem {
+        lattice,
+        free,
+        priors,
+        reference,
+        fitted,
+        groups,
+    };
+    let lines = free_lines(grid, free);
+    let (selected, mut k) = resolved_modes(grid, free, candidates);
+    let mut best = problem.fit(candidates, &selected, k)?;
+    // Widen the fitted set, one half-wave along u or v at a time, while the wider fit still
+    // reproduces every mode it fits (docs/math.md §8.3).
+    loop {
+        let mut widened: Option<(ModalSolution, [usize; 2])> = None;
+        for axis in 0..2 {
+            let mut wider = k;
+            wider[axis] += 1;
+            if wider[axis] > lines[axis] {
+                continue;
+            }
+            let selected = modes_within(grid, free, candidates, wider);
+            if selected.len() <= best.report.modes {
+                continue;
+            }
+            let trial = problem.fit(candidates, &selected, wider)?;
+            if trial.report.worst_fitted_mode <= ACCEPTED_MODE_ERROR
+                && widened
+                    .as_ref()
+                    .is_none_or(|(w, _)| trial.report.modes > w.report.modes)
+            {
+                widened = Some((trial, wider));
+            }
+        }
+        match widened {
+            Some((trial, wider)) => {
+                best = trial;
+                k = wider;
+            }
+            None => return Ok(best),
+        }
+    }
+}
+
+/// The fit's fixed parts: the elements with a scale acting on a free node, by group.
+struct Problem<'a> {
+    lattice: &'a SpringLattice,
+    free: &'a [usize],
+    priors: &'a [ElementPrior],
+    reference: &'a [f64],
+    fitted: Vec<Fitted>,
+    groups: BTreeMap<FitGroup, usize>,
+}
+
+impl Problem<'_> {
+    /// The fit to the modes `selected` of `candidates` (ranks), with half-wave bounds `k`,
+    /// then the calibration and the check of the fitted modes.
+    fn fit(
+        &self,
+        candidates: &[SampledMode],
+        selected: &[usize],
+        half_waves: [usize; 2],
+    ) -> Result<ModalSolution, DeriveError> {
+        let Problem {
+            lattice,
+            free,
+            priors,
+            reference,
+            fitted,
+            groups,
+        } = self;
+        let (lattice, priors, reference, fitted) = (*lattice, *priors, *reference, fitted.as_slice());
+        let n = free.len();
+        let refused = |reason: &str| DeriveError::InvalidOption {
+            name: "fit.derivation",
+            value: "\"modal\"".into(),
+            reason: reason.to_string(),
+        };
     let c = groups.len();
-    let (selected, half_waves) = resolved_modes(grid, free, candidates);
     let modes: Vec<&SampledMode> = selected.iter().map(|&i| &candidates[i]).collect();
     let r = modes.len();
     // The Rayleigh-quotient rows: one per pair (i, j) of modes of one frequency, so that the
@@ -502,7 +602,7 @@ pub fn modal_fit(
     let mut s = DenseMatrix::zeros(rows + 1, n);
     // y⁰: 1 for a group whose elements have consistent constants, else 0.
     let mut gk = vec![0.0; c];
-    for el in &fitted {
+    for el in fitted {
         if priors[el.element].consistent > 0.0 {
             gk[el.group] = lambda_k;
         }
@@ -595,12 +695,12 @@ pub fn modal_fit(
     let (y, x) = solve_with_floor(&hkk, &hkm, &d, &s, &gk, &gm)?;
     // The element constants and the masses before the calibration.
     let mut constants = vec![0.0; lattice.elements.len()];
-    for el in &fitted {
+    for el in fitted {
         constants[el.element] = priors[el.element].scale * y[el.group];
     }
     let mut masses: Vec<f64> = reference.iter().zip(&x).map(|(m, x)| m * x).collect();
     let mut triplets = Vec::new();
-    for el in &fitted {
+    for el in fitted {
         let k = y[el.group] * el.scale;
         for &(p, cp) in &el.nodes {
             for &(q, cq) in &el.nodes {
@@ -648,7 +748,7 @@ pub fn modal_fit(
         by_index[g] = slot;
     }
     let mut class_sums: BTreeMap<Class, (f64, usize)> = BTreeMap::new();
-    for el in &fitted {
+    for el in fitted {
         let report = &mut group_reports[by_index[el.group]];
         report.elements += 1;
         report.consistent += priors[el.element].consistent;
@@ -664,6 +764,23 @@ pub fn modal_fit(
     }
     let class_constants =
         Constants::from_pairs(class_sums.iter().map(|(&c, &(s, n))| (c, s / n as f64)));
+    // How closely the fitted model's own modes reproduce the fitted ones (matched by MAC).
+    let msm = ModalBasis::new(&l, &SparseMatrix::from_diagonal(&masses))?;
+    let window: Vec<usize> = (0..msm.len())
+        .filter(|&j| msm.omega[j] > 0.0)
+        .take(2 * r + 8)
+        .collect();
+    let shapes: Vec<Vec<f64>> = modes.iter().map(|m| m.shape.clone()).collect();
+    let omegas: Vec<f64> = modes.iter().map(|m| m.omega).collect();
+    let worst_fitted_mode = match_modes(
+        &shapes,
+        &omegas,
+        &window.iter().map(|&j| msm.mode(j)).collect::<Vec<_>>(),
+    )
+    .iter()
+    .zip(&omegas)
+    .map(|(m, w)| m.map_or(f64::INFINITY, |(j, _)| (msm.omega[window[j]] / w - 1.0).abs()))
+    .fold(0.0, f64::max);
     Ok(ModalSolution {
         report: ModalFitReport {
             classes: class_sums.keys().copied().collect(),
@@ -681,10 +798,12 @@ pub fn modal_fit(
             omega1_dnurbs,
             omega1_fitted,
             mass_scale,
+            worst_fitted_mode,
         },
         constants,
         masses,
     })
+    }
 }
 
 /// Minimizes `½ zᵀ H z − gᵀ z` over `z = (y, x)`, `y ≥ 0`, `x ≥ MASS_FLOOR`, with

@@ -202,6 +202,22 @@ pub struct FrequencyRow {
     pub mac: Option<f64>,
 }
 
+/// The regime a derived model may be used in (docs/math.md §8.7).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Regime {
+    /// The D-NURBS modes up to this angular frequency each have a matched MSM mode within 1%
+    /// (0: not even the lowest).
+    pub frequency: f64,
+    /// How many D-NURBS modes that is.
+    pub modes: usize,
+    /// The surface's size: the diagonal of its lattice's bounding box at rest.
+    pub size: f64,
+    /// The linear range: displacements up to this (a share of the size).
+    pub amplitude: f64,
+    /// The largest displacement of the D-NURBS at the probes in the scene's own run.
+    pub motion: f64,
+}
+
 /// The exact reduction of the D-NURBS onto the free nodes (the `reduction` derivation): a
 /// node-space linear model `M_T ẍ + (γ/μ) M_T ẋ + K_T x = F_T`, the same in x, y and z.
 #[derive(Clone, Debug)]
@@ -273,6 +289,8 @@ pub struct Derivation {
     pub second_excitation: Validation,
     /// Lowest frequencies of both models, side by side.
     pub frequencies: Vec<FrequencyRow>,
+    /// The regime the model may be used in.
+    pub regime: Regime,
     /// Probe parameters `(u, v)` (those of the probe nodes), the centre first.
     pub probes: Vec<(f64, f64)>,
     /// Lattice node of each probe.

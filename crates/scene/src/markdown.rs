@@ -3,7 +3,10 @@
 use std::fmt::Write as _;
 
 use nurbspring_derive::paper::PaperReport;
-use nurbspring_derive::{Derivation, FitDetail, FitReport, FitResult, ParameterSet, Validation};
+use nurbspring_derive::{
+    Derivation, FitDetail, FitReport, FitResult, LINEAR_RANGE, ParameterSet, REGIME_FREQUENCY,
+    Regime, Validation,
+};
 use nurbspring_msm::{Class, SpringKind};
 
 fn fmt_k(f: &FitResult, class: Class) -> String {
@@ -47,7 +50,8 @@ pub fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> 
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "# nurbspring derivation report\n\nScene: `{scene_label}`; derivation: `{}`\n",
+        "# nurbspring derivation report\n\n{}\n\nScene: `{scene_label}`; derivation: `{}`\n",
+        verdict(&d.regime),
         d.method.name()
     );
     if !d.warnings.is_empty() {
@@ -156,6 +160,44 @@ pub fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> 
         );
     }
     s
+}
+
+/// The one-line verdict: the frequencies and displacements the model may be used for, and
+/// where the scene's own motion lies (docs/math.md §8.7).
+fn verdict(r: &Regime) -> String {
+    let frequencies = if r.modes == 0 {
+        format!(
+            "no frequency range (not even the lowest D-NURBS mode has an MSM mode within {:.0}%)",
+            100.0 * REGIME_FREQUENCY
+        )
+    } else {
+        format!(
+            "frequencies up to ω = {:.4} rad/s (the {} lowest D-NURBS modes, each matched within {:.0}%)",
+            r.frequency,
+            r.modes,
+            100.0 * REGIME_FREQUENCY
+        )
+    };
+    let share = |x: f64| 100.0 * x / r.size;
+    let motion = if r.motion > r.amplitude {
+        format!(
+            "the scene's own motion reaches {:.4} ({:.0}% of the size): **outside the linear range**, so the figures below compare two linear models of a motion neither describes",
+            r.motion,
+            share(r.motion)
+        )
+    } else {
+        format!(
+            "the scene's own motion reaches {:.4} ({:.1}% of the size), inside it",
+            r.motion,
+            share(r.motion)
+        )
+    };
+    format!(
+        "**Verdict:** use this model for {frequencies} and displacements up to {:.4} ({:.0}% of the surface's size {:.4}); {motion}.",
+        r.amplitude,
+        100.0 * LINEAR_RANGE,
+        r.size
+    )
 }
 
 fn constants_table(s: &mut String, constants: &nurbspring_msm::Constants) {
