@@ -991,6 +991,7 @@ mod tests {
             &rows,
             &mass,
             &[],
+            &Regime::default(),
         );
         assert!(w.is_empty(), "{w:?}");
         let w = warnings(
@@ -1000,6 +1001,7 @@ mod tests {
             &rows,
             &mass,
             &[],
+            &Regime::default(),
         );
         assert_eq!(w.len(), 2, "{w:?}");
         assert!(
@@ -1034,6 +1036,7 @@ mod tests {
         let rows = [crate::outcome::FrequencyRow {
             mode: 1,
             dnurbs: 1.0,
+            msm_mode: 1,
             msm: 1.0,
             relative_difference: 0.0,
             mac: None,
@@ -1046,7 +1049,7 @@ mod tests {
             ..MassReport::default()
         };
         let warn = |method, mass: &MassReport, clamped: &[String]| {
-            warnings(method, &quiet, &quiet, &rows, mass, clamped)
+            warnings(method, &quiet, &quiet, &rows, mass, clamped, &Regime::default())
         };
         assert!(warn(Method::Modal, &masses(3.0, 2.0, 2.0), &[]).is_empty());
         assert!(warn(Method::Modal, &masses(1.5, 2.0, 2.0), &[]).is_empty());
@@ -1084,14 +1087,30 @@ mod tests {
             ..validation_with(f64::INFINITY)
         };
         let quiet = validation_with(0.0);
-        let w = warnings(Method::Modal, &stopped, &quiet, &rows, &mass, &[]);
+        let w = warnings(
+            Method::Modal,
+            &stopped,
+            &quiet,
+            &rows,
+            &mass,
+            &[],
+            &Regime::default(),
+        );
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(
             w[0].starts_with("the MSM's validation run stopped before 1.000 s (Newton iteration failed at step 7)"),
             "{w:?}"
         );
         assert!(!w[0].contains("inf%"), "{w:?}");
-        let w = warnings(Method::Modal, &quiet, &stopped, &rows, &mass, &[]);
+        let w = warnings(
+            Method::Modal,
+            &quiet,
+            &stopped,
+            &rows,
+            &mass,
+            &[],
+            &Regime::default(),
+        );
         assert_eq!(
             w,
             vec![
@@ -1099,5 +1118,98 @@ mod tests {
                     .to_string()
             ]
         );
+    }
+
+    /// A matched mode above the lowest is reported beyond 5% (not at 4.9%), and a motion
+    /// beyond 10% of the surface's size (not at 9%), each with its numbers.
+    #[test]
+    fn mode_and_linear_range_warnings_at_their_thresholds() {
+        let quiet = validation_with(0.0);
+        let mass = MassReport {
+            free_msm: 1.0,
+            free_dnurbs: 1.0,
+            ..MassReport::default()
+        };
+        let row = |mode: usize, off: f64| crate::outcome::FrequencyRow {
+            mode,
+            dnurbs: 2.0,
+            msm_mode: mode + 1,
+            msm: 2.0 * (1.0 + off),
+            relative_difference: off,
+            mac: Some(0.98),
+        };
+        let regime = |motion: f64| Regime {
+            frequency: 1.0,
+            modes: 1,
+            size: 2.0,
+            amplitude: LINEAR_RANGE * 2.0,
+            motion,
+        };
+        let warn = |rows: &[crate::outcome::FrequencyRow], r: &Regime| {
+            warnings(Method::Modal, &quiet, &quiet, rows, &mass, &[], r)
+        };
+        let fine = [row(1, 0.0), row(2, 0.049), row(3, -0.049)];
+        assert!(warn(&fine, &regime(0.18)).is_empty());
+        let off = [row(1, 0.0), row(2, 0.051), row(3, -0.06)];
+        let w = warn(&off, &regime(0.0));
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(
+            w[0].starts_with("D-NURBS mode 2 (2.000000 rad/s) is matched by MAC (0.980) to MSM mode 3")
+                && w[0].contains("+5.1% off"),
+            "{w:?}"
+        );
+        assert!(w[1].contains("-6.0% off"), "{w:?}");
+        let w = warn(&fine, &regime(0.8));
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with("the scene's own motion reaches 0.8000 at the probes, 40% of the surface's size 2.0000"),
+            "{w:?}"
+        );
+    }
+
+    /// The regime by hand: the rows up to the first beyond 1% set the frequency bound, the
+    /// size is the lattice's bounding-box diagonal, the motion the largest displacement of
+    /// any probe.
+    #[test]
+    fn regime_by_hand() {
+        let k = KnotVector::clamped_uniform(2, 2).unwrap();
+        let pts: Vec<[f64; 3]> = (0..16)
+            .map(|i| [0.5 * (i / 4) as f64, 0.3 * (i % 4) as f64, 0.1 * (i % 3) as f64])
+            .collect();
+        let s = setup(Geometry::Surface(
+            NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 16]).unwrap(),
+        ));
+        let row = |mode: usize, dnurbs: f64, off: f64| crate::outcome::FrequencyRow {
+            mode,
+            dnurbs,
+            msm_mode: mode,
+            msm: dnurbs * (1.0 + off),
+            relative_difference: off,
+            mac: Some(1.0),
+        };
+        let rows = [
+            row(1, 1.0, 0.0),
+            row(2, 2.0, 0.009),
+            row(3, 3.0, -0.011),
+            row(4, 4.0, 0.0),
+        ];
+        let mut trajectory = Trajectory::new(2);
+        trajectory.t = vec![0.0, 1.0, 2.0];
+        trajectory.probes = vec![
+            vec![[0.0, 0.0, 1.0], [0.0, 0.3, 1.4], [0.0, 0.0, 1.0]],
+            vec![[1.0, 1.0, 0.0], [1.0, 1.0, 0.2], [1.0, 1.0, -0.1]],
+        ];
+        let r = regime(&s, &trajectory, &rows);
+        assert_eq!((r.frequency, r.modes), (2.0, 2));
+        let positions = &s.lattice().positions;
+        let extent = |x: usize| {
+            let v = positions.iter().map(|p| p[x]);
+            v.clone().fold(f64::NEG_INFINITY, f64::max) - v.fold(f64::INFINITY, f64::min)
+        };
+        let size = (extent(0).powi(2) + extent(1).powi(2) + extent(2).powi(2)).sqrt();
+        assert!((r.size - size).abs() < 1e-15 * size);
+        assert!((r.amplitude - LINEAR_RANGE * size).abs() < 1e-15 * size);
+        assert!((r.motion - 0.5).abs() < 1e-15, "{}", r.motion);
+        assert_eq!(regime(&s, &trajectory, &[row(1, 1.0, 0.02)]).modes, 0);
     }
 }

@@ -1006,11 +1006,12 @@ pub(crate) mod tests {
                 "{a}, {b}"
             );
         }
-        // 7 free lines along u: K_u = 4; 5 along v: K_v = 3; at most 12 modes.
+        // 7 free lines along u: K_u = 4; 5 along v: K_v = 3; at most 12 modes. Frequencies
+        // `√(a² + 1.7 b²)`, none repeated.
         let mut modes = Vec::new();
         for a in 1..=7 {
             for b in 1..=5 {
-                modes.push((((a * a + b * b) as f64).sqrt(), a, b));
+                modes.push((((a * a) as f64 + 1.7 * (b * b) as f64).sqrt(), a, b));
             }
         }
         modes.sort_by(|x, y| x.0.total_cmp(&y.0));
