@@ -286,6 +286,7 @@ fn node_system(
     stiffness: SparseMatrix,
     load: Vec<[f64; 3]>,
     damping_ratio: f64,
+    basis: Option<ModalBasis>,
 ) -> Result<NodeModel, DeriveError> {
     let nodes = setup.node_state();
     let pick = |v: &[[f64; 3]]| -> Vec<[f64; 3]> {
@@ -305,7 +306,10 @@ fn node_system(
         displacement,
         velocity: pick(&nodes.velocities),
     };
-    let basis = ModalBasis::new(&system.stiffness, &system.mass)?;
+    let basis = match basis {
+        Some(b) => b,
+        None => ModalBasis::new(&system.stiffness, &system.mass)?,
+    };
     Ok(NodeModel { system, basis })
 }
 
@@ -454,7 +458,7 @@ pub fn derive_linear(
                 e.k = k;
             }
             lattice.elements.retain(|e| e.k > 0.0);
-            let (masses, fit) = if method == Method::Excitation {
+            let (masses, fit, basis) = if method == Method::Excitation {
                 let (classes, stiffness) = class_stiffness(&lattice, &map.free);
                 let e = excitation_fit(
                     &modes,
@@ -468,9 +472,14 @@ pub fn derive_linear(
                 for el in &mut lattice.elements {
                     el.k *= e.scales.value(el.class());
                 }
-                (e.masses.clone(), FitDetail::Excitation(e.report))
+                (e.masses.clone(), FitDetail::Excitation(e.report), None)
             } else {
-                (modal.masses.clone(), FitDetail::Modal(modal.report))
+                // The fit's own modes are the model's: L and the masses are the same.
+                (
+                    modal.masses.clone(),
+                    FitDetail::Modal(modal.report),
+                    Some(modal.basis),
+                )
             };
             let mut all = dual.clone();
             for (i, &a) in map.free.iter().enumerate() {
@@ -490,6 +499,7 @@ pub fn derive_linear(
                 l,
                 free_forces(&masses, &lattice.forces),
                 ratio,
+                basis,
             )?;
             let rule = "one mass per free node, fitted with the element constants to the D-NURBS modes the lattice resolves near the reference masses (row sums of M_T), then scaled so that the lowest frequency matches".to_string();
             (Some(lattice), None, fit, node, rule)
@@ -504,6 +514,7 @@ pub fn derive_linear(
                 symmetric_sparse(&k_t),
                 f_t.clone(),
                 ratio,
+                None,
             )?;
             let lattice = setup.lattice();
             let reduction = NodeReduction {

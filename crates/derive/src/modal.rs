@@ -38,8 +38,10 @@ use crate::validation::match_modes;
 /// Greville abscissae of a cubic are uneven over the first three, and a clamp (two fixed
 /// rings) is carried there.
 pub const RINGS: usize = 3;
-/// At most this many D-NURBS modes are fitted.
-pub const FITTED_MODES: usize = 100;
+/// At most this many D-NURBS modes are fitted: a fixed set of low modes, which a finer
+/// lattice resolves better (a cap growing with the lattice keeps each mode's accuracy
+/// where it is; measured in docs/derivations.md).
+pub const FITTED_MODES: usize = 80;
 /// Every mode with at most this many half-waves along each direction is fitted, however few
 /// lines the lattice has (all of them on a lattice with fewer free lines).
 pub const MIN_HALF_WAVES: usize = 3;
@@ -192,6 +194,8 @@ pub struct ModalSolution {
     pub constants: Vec<f64>,
     /// One mass per free node, calibrated.
     pub masses: Vec<f64>,
+    /// The modes of the fitted model on the free nodes (those the validation runs).
+    pub basis: ModalBasis,
     /// The report.
     pub report: ModalFitReport,
 }
@@ -802,6 +806,7 @@ impl Problem<'_> {
         },
         constants,
         masses,
+        basis: msm,
     })
     }
 }
