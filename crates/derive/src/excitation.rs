@@ -1,13 +1,12 @@
 //! The `excitation` derivation (docs/math.md §8.4): the modal fit refined on the D-NURBS modes
-//! that the scene's own initial velocity and loads excite. The masses are the reference
+//! that the scene's own initial velocity and loads excite. The masses are the modal fit's
 //! masses times one scale; the unknowns are `log s_c`, one scale of the modal fit's element
 //! constants per element class, and the log mass scale; the residuals, over the `q` most
-//! excited modes, are the
-//! log ratio of each mode's frequency to that of the MSM mode of best MAC and the difference
-//! of their normalized shapes at the nodes, weighted by the square root of the mode's share of
-//! the motion. Levenberg–Marquardt from the modal fit, then the calibration of the lowest
-//! frequency. It can over-fit: constants far from the modal fit's, or a much smaller explicit
-//! step, are reported as warnings.
+//! excited modes, are the log ratio of each mode's frequency to that of the MSM mode of best
+//! MAC and the difference of their normalized shapes at the nodes, weighted by the square root
+//! of the mode's share of the motion, and a pull of each `log s_c` towards 0.
+//! Levenberg–Marquardt from the modal fit, then the calibration of the lowest frequency. It
+//! can over-fit: scales far from 1, or a much smaller explicit step, are reported as warnings.
 
 use nurbspring_linalg::{
     DenseMatrix, SparseMatrix, cholesky_solve_dense, generalized_eigen_sparse_lowest,
@@ -30,6 +29,9 @@ pub const CONSTANT_RANGE: f64 = 1e3;
 pub const STEP_SHRINK: f64 = 10.0;
 /// Levenberg–Marquardt iterations.
 const ITERATIONS: usize = 40;
+/// The weight of the rows `log s_c` that keep each class scale near the modal fit's: a 10%
+/// change costs as much as a 1% frequency error of a mode carrying the whole motion.
+const SCALE_REGULARIZATION: f64 = 0.1;
 
 /// The refined model.
 pub struct ExcitationSolution {
@@ -131,7 +133,7 @@ pub fn excitation_fit(
         let k: Vec<f64> = theta[..active.len()].iter().map(|t| t.exp()).collect();
         let s = theta[active.len()].exp();
         let l = combine(&active_units, &k, n)?;
-        let masses: Vec<f64> = reference.iter().map(|m| s * m).collect();
+        let masses: Vec<f64> = modal.masses.iter().map(|m| s * m).collect();
         let (omega, vectors) = msm_modes(&l, &masses, count)?;
         let mut r = Vec::new();
         for (w, shape, share) in &targets {
@@ -148,18 +150,13 @@ pub fn excitation_fit(
                 r.push(weight * (a / na - sign * b / nb));
             }
         }
+        // The pull of each class scale towards the modal fit's (log 1).
+        r.extend(theta[..active.len()].iter().map(|t| SCALE_REGULARIZATION * t));
         Ok(r)
     };
     let mut theta: Vec<f64> = vec![0.0; active.len()];
-    // The modal masses are m̄-like: start from their mean ratio to m̄.
-    let s0 = modal
-        .masses
-        .iter()
-        .zip(reference)
-        .map(|(m, r)| m / r)
-        .sum::<f64>()
-        / n as f64;
-    theta.push(s0.ln());
+    // The modal fit's masses, scaled.
+    theta.push(0.0);
     let mut r = residual(&theta)?;
     let start = norm(&r);
     let mut damping = 1e-3;
@@ -219,7 +216,7 @@ pub fn excitation_fit(
     let k: Vec<f64> = theta[..active.len()].iter().map(|t| t.exp()).collect();
     let s = theta[active.len()].exp();
     let l = combine(&active_units, &k, n)?;
-    let mut masses: Vec<f64> = reference.iter().map(|m| s * m).collect();
+    let mut masses: Vec<f64> = modal.masses.iter().map(|m| s * m).collect();
     let omega1 = lowest_frequency(&l, &masses)?;
     let omega1_dnurbs = modal.report.omega1_dnurbs;
     let mass_scale = (omega1 / omega1_dnurbs).powi(2);

@@ -151,9 +151,10 @@ pub struct GroupFit {
 /// What the modal fit reports.
 #[derive(Clone, Debug, Serialize)]
 pub struct ModalFitReport {
-    /// The element classes with a fitted element.
+    /// The element classes the model keeps (with an element of positive constant).
     pub classes: Vec<Class>,
-    /// The mean constant of each class's elements (every element's own is in `msm.json`).
+    /// The mean constant of each class's elements in the model (every element's own is in
+    /// `msm.json`).
     pub constants: Constants,
     /// The groups, their consistent constants and factors.
     pub groups: Vec<GroupFit>,
@@ -757,11 +758,14 @@ impl Problem<'_> {
         report.elements += 1;
         report.consistent += priors[el.element].consistent;
         report.factor = y[el.group];
-        let entry = class_sums
-            .entry(lattice.elements[el.element].class())
-            .or_insert((0.0, 0));
-        entry.0 += constants[el.element];
-        entry.1 += 1;
+        // The model keeps the elements with a positive constant.
+        if constants[el.element] > 0.0 {
+            let entry = class_sums
+                .entry(lattice.elements[el.element].class())
+                .or_insert((0.0, 0));
+            entry.0 += constants[el.element];
+            entry.1 += 1;
+        }
     }
     for g in &mut group_reports {
         g.consistent /= g.elements.max(1) as f64;
