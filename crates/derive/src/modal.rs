@@ -964,6 +964,70 @@ pub(crate) mod tests {
         }
     }
 
+    /// The reduced solve (masses eliminated by Woodbury and a Schur complement, the factors by
+    /// non-negative least squares) against the optimality conditions of the dense problem
+    /// (H assembled from its blocks): the gradient `Hz − g` vanishes on every positive factor
+    /// and every mass above the floor, is ≥ 0 on a factor at 0; a mass pulled below the floor
+    /// is held at it.
+    #[test]
+    fn the_reduced_solve_against_a_dense_one() {
+        let mut seed = 11u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let (c, n, rows) = (3, 5, 2);
+        let a = DenseMatrix::from_fn(7, c + n, |_, _| rnd());
+        let gram = a.transpose().matmul(&a);
+        let hkk = DenseMatrix::from_fn(c, c, |i, j| gram[(i, j)] + if i == j { 0.5 } else { 0.0 });
+        let hkm = DenseMatrix::from_fn(c, n, |i, j| 0.3 * gram[(i, c + j)]);
+        let d: Vec<f64> = (0..n).map(|_| 2.0 + rnd()).collect();
+        let s = DenseMatrix::from_fn(rows, n, |_, _| rnd());
+        let dense = |gm: &[f64], gk: &[f64]| {
+            let t = c + n;
+            let h = DenseMatrix::from_fn(t, t, |i, j| match (i < c, j < c) {
+                (true, true) => hkk[(i, j)],
+                (true, false) => hkm[(i, j - c)],
+                (false, true) => hkm[(j, i - c)],
+                (false, false) => {
+                    let (p, q) = (i - c, j - c);
+                    (0..rows).map(|r| s[(r, p)] * s[(r, q)]).sum::<f64>()
+                        + if p == q { d[p] } else { 0.0 }
+                }
+            });
+            let g: Vec<f64> = gk.iter().chain(gm).copied().collect();
+            (h, g)
+        };
+        for trial in 0..20 {
+            let gk: Vec<f64> = (0..c).map(|_| rnd()).collect();
+            let gm: Vec<f64> = (0..n).map(|_| 3.0 + rnd()).collect();
+            let (h, g) = dense(&gm, &gk);
+            let (y, x) = solve_with_floor(&hkk, &hkm, &d, &s, &gk, &gm).unwrap();
+            let z: Vec<f64> = y.iter().chain(&x).copied().collect();
+            let hz = h.mul_vec(&z);
+            let floored: Vec<bool> = (0..n).map(|p| x[p] == MASS_FLOOR).collect();
+            for j in 0..c + n {
+                let grad = hz[j] - g[j];
+                if j < c && y[j] == 0.0 {
+                    assert!(grad >= -1e-10, "{trial}: factor {j} at 0 with gradient {grad}");
+                } else if j >= c && floored[j - c] {
+                    assert!(x[j - c] == MASS_FLOOR);
+                } else {
+                    assert!(grad.abs() < 1e-10, "{trial}: unknown {j} gradient {grad}");
+                }
+            }
+            assert!(y.iter().all(|&v| v >= 0.0) && x.iter().all(|&v| v >= MASS_FLOOR));
+        }
+        // A right-hand side that pulls mass 0 below the floor.
+        let gk = vec![0.1; c];
+        let mut gm = vec![3.0; n];
+        gm[0] = -50.0;
+        let (_, x) = solve_with_floor(&hkk, &hkm, &d, &s, &gk, &gm).unwrap();
+        assert_eq!(x[0], MASS_FLOOR);
+    }
+
     /// Bands by hand on 10 lines: the first three from each edge by their distance, the
     /// rest inside; an element is banded by its line nearest an edge, the low edge first.
     #[test]
