@@ -1049,7 +1049,15 @@ mod tests {
             ..MassReport::default()
         };
         let warn = |method, mass: &MassReport, clamped: &[String]| {
-            warnings(method, &quiet, &quiet, &rows, mass, clamped, &Regime::default())
+            warnings(
+                method,
+                &quiet,
+                &quiet,
+                &rows,
+                mass,
+                clamped,
+                &Regime::default(),
+            )
         };
         assert!(warn(Method::Modal, &masses(3.0, 2.0, 2.0), &[]).is_empty());
         assert!(warn(Method::Modal, &masses(1.5, 2.0, 2.0), &[]).is_empty());
@@ -1154,8 +1162,9 @@ mod tests {
         let w = warn(&off, &regime(0.0));
         assert_eq!(w.len(), 2, "{w:?}");
         assert!(
-            w[0].starts_with("D-NURBS mode 2 (2.000000 rad/s) is matched by MAC (0.980) to MSM mode 3")
-                && w[0].contains("+5.1% off"),
+            w[0].starts_with(
+                "D-NURBS mode 2 (2.000000 rad/s) is matched by MAC (0.980) to MSM mode 3"
+            ) && w[0].contains("+5.1% off"),
             "{w:?}"
         );
         assert!(w[1].contains("-6.0% off"), "{w:?}");
@@ -1174,7 +1183,13 @@ mod tests {
     fn regime_by_hand() {
         let k = KnotVector::clamped_uniform(2, 2).unwrap();
         let pts: Vec<[f64; 3]> = (0..16)
-            .map(|i| [0.5 * (i / 4) as f64, 0.3 * (i % 4) as f64, 0.1 * (i % 3) as f64])
+            .map(|i| {
+                [
+                    0.5 * (i / 4) as f64,
+                    0.3 * (i % 4) as f64,
+                    0.1 * (i % 3) as f64,
+                ]
+            })
             .collect();
         let s = setup(Geometry::Surface(
             NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 16]).unwrap(),

@@ -151,7 +151,11 @@ pub fn excitation_fit(
             }
         }
         // The pull of each class scale towards the modal fit's (log 1).
-        r.extend(theta[..active.len()].iter().map(|t| SCALE_REGULARIZATION * t));
+        r.extend(
+            theta[..active.len()]
+                .iter()
+                .map(|t| SCALE_REGULARIZATION * t),
+        );
         Ok(r)
     };
     let mut theta: Vec<f64> = vec![0.0; active.len()];
@@ -244,7 +248,10 @@ pub fn excitation_fit(
     let refined: Vec<Class> = active.iter().map(|&c| classes[c]).collect();
     let warnings = overfit_warnings(
         &refined,
-        &refined.iter().map(|&c| constants.value(c)).collect::<Vec<_>>(),
+        &refined
+            .iter()
+            .map(|&c| constants.value(c))
+            .collect::<Vec<_>>(),
         modal_constants,
         (dt_modal, dt_here),
     );

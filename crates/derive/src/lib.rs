@@ -57,9 +57,8 @@ mod validation;
 
 pub use error::DeriveError;
 pub use evaluation::{
-    DnurbsModes, LINEAR_RANGE, MATCH_WINDOW, PERIODS, REGIME_FREQUENCY, REGIME_MODES,
-    TABLE_MODES, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_MODE_FREQUENCY, WARN_RELATIVE_RMS,
-    horizon,
+    DnurbsModes, LINEAR_RANGE, MATCH_WINDOW, PERIODS, REGIME_FREQUENCY, REGIME_MODES, TABLE_MODES,
+    WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_MODE_FREQUENCY, WARN_RELATIVE_RMS, horizon,
 };
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use linear::derive_linear;

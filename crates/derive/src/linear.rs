@@ -11,8 +11,8 @@ use nurbspring_msm::{Class, Constants, SpringLattice};
 
 use crate::DeriveError;
 use crate::evaluation::{
-    DnurbsModes, REGIME_MODES, frequency_table, impulse, initial_speed, matched_modes,
-    node_watch, regime, triplicate, unloaded, validation, warnings, with_totals,
+    DnurbsModes, REGIME_MODES, frequency_table, impulse, initial_speed, matched_modes, node_watch,
+    regime, triplicate, unloaded, validation, warnings, with_totals,
 };
 use crate::excitation::excitation_fit;
 use crate::modal::{FITTED_MODES, SampledMode, element_priors, modal_fit};
@@ -439,11 +439,8 @@ pub fn derive_linear(
     };
     let (lattice, reduction_model, fit, node, rule) = match method {
         Method::Modal | Method::Excitation => {
-            let priors = element_priors(
-                setup.lattice(),
-                config.material.stiffness_by_slot(),
-                &area,
-            );
+            let priors =
+                element_priors(setup.lattice(), config.material.stiffness_by_slot(), &area);
             let candidates = sampled_modes(&modes, &map, CANDIDATE_MODES);
             let modal = modal_fit(
                 setup.lattice(),

@@ -308,9 +308,7 @@ pub fn element_priors(lattice: &SpringLattice, slots: [f64; 6], area: &[f64]) ->
             );
             // The spacing: the extent over the intervals along the stencil's direction.
             let h = match e.kind {
-                LinearKind::Diagonal | LinearKind::Twist => {
-                    (extent(true) * extent(false)).sqrt()
-                }
+                LinearKind::Diagonal | LinearKind::Twist => (extent(true) * extent(false)).sqrt(),
                 _ => extent(along_u) / (e.nodes.len() - 1) as f64,
             };
             let h2 = h * h;
@@ -576,242 +574,247 @@ impl Problem<'_> {
             fitted,
             groups,
         } = self;
-        let (lattice, priors, reference, fitted) = (*lattice, *priors, *reference, fitted.as_slice());
+        let (lattice, priors, reference, fitted) =
+            (*lattice, *priors, *reference, fitted.as_slice());
         let n = free.len();
         let refused = |reason: &str| DeriveError::InvalidOption {
             name: "fit.derivation",
             value: "\"modal\"".into(),
             reason: reason.to_string(),
         };
-    let c = groups.len();
-    let modes: Vec<&SampledMode> = selected.iter().map(|&i| &candidates[i]).collect();
-    let r = modes.len();
-    // The Rayleigh-quotient rows: one per pair (i, j) of modes of one frequency, so that the
-    // rows do not depend on how the eigensolver rotated a repeated pair.
-    let mut pairs: Vec<(usize, usize)> = Vec::new();
-    let mut first = 0;
-    for i in 0..r {
-        if (modes[i].omega - modes[first].omega).abs() > REPEATED * modes[i].omega {
-            first = i;
+        let c = groups.len();
+        let modes: Vec<&SampledMode> = selected.iter().map(|&i| &candidates[i]).collect();
+        let r = modes.len();
+        // The Rayleigh-quotient rows: one per pair (i, j) of modes of one frequency, so that the
+        // rows do not depend on how the eigensolver rotated a repeated pair.
+        let mut pairs: Vec<(usize, usize)> = Vec::new();
+        let mut first = 0;
+        for i in 0..r {
+            if (modes[i].omega - modes[first].omega).abs() > REPEATED * modes[i].omega {
+                first = i;
+            }
+            pairs.extend((first..=i).map(|j| (j, i)));
         }
-        pairs.extend((first..=i).map(|j| (j, i)));
-    }
-    // Normal equations of the rows in the module docs, unknowns (y, x).
-    let lambda_k = CONSTANT_REGULARIZATION;
-    let lambda_m = MASS_REGULARIZATION;
-    let mut hkk = DenseMatrix::zeros(c, c);
-    let mut hkm = DenseMatrix::zeros(c, n);
-    let mut d = vec![lambda_m; n];
-    // The rows of the mass block beyond its diagonal: the Rayleigh quotients, the total.
-    let rows = pairs.len();
-    let mut s = DenseMatrix::zeros(rows + 1, n);
-    // y⁰: 1 for a group whose elements have consistent constants, else 0.
-    let mut gk = vec![0.0; c];
-    for el in fitted {
-        if priors[el.element].consistent > 0.0 {
-            gk[el.group] = lambda_k;
+        // Normal equations of the rows in the module docs, unknowns (y, x).
+        let lambda_k = CONSTANT_REGULARIZATION;
+        let lambda_m = MASS_REGULARIZATION;
+        let mut hkk = DenseMatrix::zeros(c, c);
+        let mut hkm = DenseMatrix::zeros(c, n);
+        let mut d = vec![lambda_m; n];
+        // The rows of the mass block beyond its diagonal: the Rayleigh quotients, the total.
+        let rows = pairs.len();
+        let mut s = DenseMatrix::zeros(rows + 1, n);
+        // y⁰: 1 for a group whose elements have consistent constants, else 0.
+        let mut gk = vec![0.0; c];
+        for el in fitted {
+            if priors[el.element].consistent > 0.0 {
+                gk[el.group] = lambda_k;
+            }
         }
-    }
-    let mut gm = vec![lambda_m; n];
-    let mut at_node: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
-    for (f, el) in fitted.iter().enumerate() {
-        for &(p, coefficient) in &el.nodes {
-            at_node[p].push((f, coefficient));
+        let mut gm = vec![lambda_m; n];
+        let mut at_node: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+        for (f, el) in fitted.iter().enumerate() {
+            for &(p, coefficient) in &el.nodes {
+                at_node[p].push((f, coefficient));
+            }
         }
-    }
-    let strains: Vec<Vec<f64>> = modes
-        .iter()
-        .map(|mode| {
-            fitted
-                .iter()
-                .map(|el| el.nodes.iter().map(|&(p, cf)| cf * mode.shape[p]).sum())
-                .collect()
-        })
-        .collect();
-    for (row, &(i, j)) in pairs.iter().enumerate() {
-        let lambda = modes[j].omega * modes[j].omega;
-        let (phi, psi) = (&modes[i].shape, &modes[j].shape);
-        let scale: f64 = lambda
-            * (0..n)
-                .map(|p| reference[p] * 0.5 * (phi[p] * phi[p] + psi[p] * psi[p]))
-                .sum::<f64>();
-        // Off-diagonal entries count twice in the Frobenius norm of the pair's block.
-        let w = FREQUENCY_WEIGHT / scale * if i == j { 1.0 } else { 2.0_f64.sqrt() };
-        let mut f = vec![0.0; c];
-        for (e, el) in fitted.iter().enumerate() {
-            f[el.group] += w * el.scale * strains[i][e] * strains[j][e];
-        }
-        for p in 0..n {
-            s[(row, p)] = -w * lambda * reference[p] * phi[p] * psi[p];
-        }
-        for g in 0..c {
-            for h in 0..c {
-                hkk[(g, h)] += f[g] * f[h];
+        let strains: Vec<Vec<f64>> = modes
+            .iter()
+            .map(|mode| {
+                fitted
+                    .iter()
+                    .map(|el| el.nodes.iter().map(|&(p, cf)| cf * mode.shape[p]).sum())
+                    .collect()
+            })
+            .collect();
+        for (row, &(i, j)) in pairs.iter().enumerate() {
+            let lambda = modes[j].omega * modes[j].omega;
+            let (phi, psi) = (&modes[i].shape, &modes[j].shape);
+            let scale: f64 = lambda
+                * (0..n)
+                    .map(|p| reference[p] * 0.5 * (phi[p] * phi[p] + psi[p] * psi[p]))
+                    .sum::<f64>();
+            // Off-diagonal entries count twice in the Frobenius norm of the pair's block.
+            let w = FREQUENCY_WEIGHT / scale * if i == j { 1.0 } else { 2.0_f64.sqrt() };
+            let mut f = vec![0.0; c];
+            for (e, el) in fitted.iter().enumerate() {
+                f[el.group] += w * el.scale * strains[i][e] * strains[j][e];
             }
             for p in 0..n {
-                hkm[(g, p)] += f[g] * s[(row, p)];
+                s[(row, p)] = -w * lambda * reference[p] * phi[p] * psi[p];
             }
-        }
-    }
-    let mut a_row = vec![0.0; c];
-    let mut touched: Vec<usize> = Vec::new();
-    let mut marked = vec![false; c];
-    for (mode, strain) in modes.iter().zip(&strains) {
-        let lambda = mode.omega * mode.omega;
-        let phi = &mode.shape;
-        let eigen_scale: f64 = (0..n)
-            .map(|p| (lambda * reference[p] * phi[p]).powi(2))
-            .sum();
-        // The eigen-equation rows, node by node.
-        let inv = 1.0 / eigen_scale;
-        for p in 0..n {
-            for &(e, coefficient) in &at_node[p] {
-                let g = fitted[e].group;
-                if !marked[g] {
-                    marked[g] = true;
-                    touched.push(g);
+            for g in 0..c {
+                for h in 0..c {
+                    hkk[(g, h)] += f[g] * f[h];
                 }
-                a_row[g] += fitted[e].scale * coefficient * strain[e];
-            }
-            let mass = -lambda * reference[p] * phi[p];
-            for &g in &touched {
-                for &h in &touched {
-                    hkk[(g, h)] += inv * a_row[g] * a_row[h];
+                for p in 0..n {
+                    hkm[(g, p)] += f[g] * s[(row, p)];
                 }
-                hkm[(g, p)] += inv * a_row[g] * mass;
-            }
-            d[p] += inv * mass * mass;
-            for &g in &touched {
-                a_row[g] = 0.0;
-                marked[g] = false;
-            }
-            touched.clear();
-        }
-    }
-    for g in 0..c {
-        hkk[(g, g)] += lambda_k;
-    }
-    let total: f64 = reference.iter().sum();
-    for p in 0..n {
-        let e = TOTAL_MASS_WEIGHT * reference[p] / total;
-        s[(rows, p)] = e;
-        gm[p] += TOTAL_MASS_WEIGHT * e;
-    }
-    let (y, x) = solve_with_floor(&hkk, &hkm, &d, &s, &gk, &gm)?;
-    // The element constants and the masses before the calibration.
-    let mut constants = vec![0.0; lattice.elements.len()];
-    for el in fitted {
-        constants[el.element] = priors[el.element].scale * y[el.group];
-    }
-    let mut masses: Vec<f64> = reference.iter().zip(&x).map(|(m, x)| m * x).collect();
-    let mut triplets = Vec::new();
-    for el in fitted {
-        let k = y[el.group] * el.scale;
-        for &(p, cp) in &el.nodes {
-            for &(q, cq) in &el.nodes {
-                triplets.push((p, q, k * cp * cq));
             }
         }
-    }
-    let l = SparseMatrix::from_triplets(n, n, &triplets)?;
-    let (mut num, mut den, mut rayleigh) = (0.0, 0.0, 0.0);
-    for mode in &modes {
-        let lambda = mode.omega * mode.omega;
-        let mut lp = vec![0.0; n];
-        l.mul_vec(&mode.shape, &mut lp);
-        let mut quotient_den = 0.0;
+        let mut a_row = vec![0.0; c];
+        let mut touched: Vec<usize> = Vec::new();
+        let mut marked = vec![false; c];
+        for (mode, strain) in modes.iter().zip(&strains) {
+            let lambda = mode.omega * mode.omega;
+            let phi = &mode.shape;
+            let eigen_scale: f64 = (0..n)
+                .map(|p| (lambda * reference[p] * phi[p]).powi(2))
+                .sum();
+            // The eigen-equation rows, node by node.
+            let inv = 1.0 / eigen_scale;
+            for p in 0..n {
+                for &(e, coefficient) in &at_node[p] {
+                    let g = fitted[e].group;
+                    if !marked[g] {
+                        marked[g] = true;
+                        touched.push(g);
+                    }
+                    a_row[g] += fitted[e].scale * coefficient * strain[e];
+                }
+                let mass = -lambda * reference[p] * phi[p];
+                for &g in &touched {
+                    for &h in &touched {
+                        hkk[(g, h)] += inv * a_row[g] * a_row[h];
+                    }
+                    hkm[(g, p)] += inv * a_row[g] * mass;
+                }
+                d[p] += inv * mass * mass;
+                for &g in &touched {
+                    a_row[g] = 0.0;
+                    marked[g] = false;
+                }
+                touched.clear();
+            }
+        }
+        for g in 0..c {
+            hkk[(g, g)] += lambda_k;
+        }
+        let total: f64 = reference.iter().sum();
         for p in 0..n {
-            let target = mode.shape[p] * masses[p];
-            num += (lp[p] / lambda - target).powi(2);
-            den += target * target;
-            quotient_den += target * mode.shape[p];
+            let e = TOTAL_MASS_WEIGHT * reference[p] / total;
+            s[(rows, p)] = e;
+            gm[p] += TOTAL_MASS_WEIGHT * e;
         }
-        rayleigh += (dot(&lp, &mode.shape) / (lambda * quotient_den) - 1.0).powi(2);
-    }
-    let omega1_dnurbs = candidates[0].omega;
-    let omega1_fitted = lowest_frequency(&l, &masses)?;
-    if omega1_fitted <= 0.0 {
-        return Err(refused(
-            "the fitted lattice has no stiffness on its free nodes (every constant is 0)",
-        ));
-    }
-    let mass_scale = (omega1_fitted / omega1_dnurbs).powi(2);
-    masses.iter_mut().for_each(|m| *m *= mass_scale);
-    // Reports by group and by class.
-    let mut group_reports: Vec<GroupFit> = groups
-        .keys()
-        .map(|g| GroupFit {
-            group: g.name(),
-            elements: 0,
-            consistent: 0.0,
-            factor: 0.0,
+        let (y, x) = solve_with_floor(&hkk, &hkm, &d, &s, &gk, &gm)?;
+        // The element constants and the masses before the calibration.
+        let mut constants = vec![0.0; lattice.elements.len()];
+        for el in fitted {
+            constants[el.element] = priors[el.element].scale * y[el.group];
+        }
+        let mut masses: Vec<f64> = reference.iter().zip(&x).map(|(m, x)| m * x).collect();
+        let mut triplets = Vec::new();
+        for el in fitted {
+            let k = y[el.group] * el.scale;
+            for &(p, cp) in &el.nodes {
+                for &(q, cq) in &el.nodes {
+                    triplets.push((p, q, k * cp * cq));
+                }
+            }
+        }
+        let l = SparseMatrix::from_triplets(n, n, &triplets)?;
+        let (mut num, mut den, mut rayleigh) = (0.0, 0.0, 0.0);
+        for mode in &modes {
+            let lambda = mode.omega * mode.omega;
+            let mut lp = vec![0.0; n];
+            l.mul_vec(&mode.shape, &mut lp);
+            let mut quotient_den = 0.0;
+            for p in 0..n {
+                let target = mode.shape[p] * masses[p];
+                num += (lp[p] / lambda - target).powi(2);
+                den += target * target;
+                quotient_den += target * mode.shape[p];
+            }
+            rayleigh += (dot(&lp, &mode.shape) / (lambda * quotient_den) - 1.0).powi(2);
+        }
+        let omega1_dnurbs = candidates[0].omega;
+        let omega1_fitted = lowest_frequency(&l, &masses)?;
+        if omega1_fitted <= 0.0 {
+            return Err(refused(
+                "the fitted lattice has no stiffness on its free nodes (every constant is 0)",
+            ));
+        }
+        let mass_scale = (omega1_fitted / omega1_dnurbs).powi(2);
+        masses.iter_mut().for_each(|m| *m *= mass_scale);
+        // Reports by group and by class.
+        let mut group_reports: Vec<GroupFit> = groups
+            .keys()
+            .map(|g| GroupFit {
+                group: g.name(),
+                elements: 0,
+                consistent: 0.0,
+                factor: 0.0,
+            })
+            .collect();
+        let order: Vec<usize> = groups.values().copied().collect();
+        let mut by_index = vec![0; c];
+        for (slot, &g) in order.iter().enumerate() {
+            by_index[g] = slot;
+        }
+        let mut class_sums: BTreeMap<Class, (f64, usize)> = BTreeMap::new();
+        for el in fitted {
+            let report = &mut group_reports[by_index[el.group]];
+            report.elements += 1;
+            report.consistent += priors[el.element].consistent;
+            report.factor = y[el.group];
+            // The model keeps the elements with a positive constant.
+            if constants[el.element] > 0.0 {
+                let entry = class_sums
+                    .entry(lattice.elements[el.element].class())
+                    .or_insert((0.0, 0));
+                entry.0 += constants[el.element];
+                entry.1 += 1;
+            }
+        }
+        for g in &mut group_reports {
+            g.consistent /= g.elements.max(1) as f64;
+        }
+        let class_constants =
+            Constants::from_pairs(class_sums.iter().map(|(&c, &(s, n))| (c, s / n as f64)));
+        // How closely the fitted model's own modes reproduce the fitted ones (matched by MAC).
+        let msm = ModalBasis::new(&l, &SparseMatrix::from_diagonal(&masses))?;
+        let window: Vec<usize> = (0..msm.len())
+            .filter(|&j| msm.omega[j] > 0.0)
+            .take(2 * r + 8)
+            .collect();
+        let shapes: Vec<Vec<f64>> = modes.iter().map(|m| m.shape.clone()).collect();
+        let omegas: Vec<f64> = modes.iter().map(|m| m.omega).collect();
+        let worst_fitted_mode = match_modes(
+            &shapes,
+            &omegas,
+            &window.iter().map(|&j| msm.mode(j)).collect::<Vec<_>>(),
+        )
+        .iter()
+        .zip(&omegas)
+        .map(|(m, w)| {
+            m.map_or(f64::INFINITY, |(j, _)| {
+                (msm.omega[window[j]] / w - 1.0).abs()
+            })
         })
-        .collect();
-    let order: Vec<usize> = groups.values().copied().collect();
-    let mut by_index = vec![0; c];
-    for (slot, &g) in order.iter().enumerate() {
-        by_index[g] = slot;
-    }
-    let mut class_sums: BTreeMap<Class, (f64, usize)> = BTreeMap::new();
-    for el in fitted {
-        let report = &mut group_reports[by_index[el.group]];
-        report.elements += 1;
-        report.consistent += priors[el.element].consistent;
-        report.factor = y[el.group];
-        // The model keeps the elements with a positive constant.
-        if constants[el.element] > 0.0 {
-            let entry = class_sums
-                .entry(lattice.elements[el.element].class())
-                .or_insert((0.0, 0));
-            entry.0 += constants[el.element];
-            entry.1 += 1;
-        }
-    }
-    for g in &mut group_reports {
-        g.consistent /= g.elements.max(1) as f64;
-    }
-    let class_constants =
-        Constants::from_pairs(class_sums.iter().map(|(&c, &(s, n))| (c, s / n as f64)));
-    // How closely the fitted model's own modes reproduce the fitted ones (matched by MAC).
-    let msm = ModalBasis::new(&l, &SparseMatrix::from_diagonal(&masses))?;
-    let window: Vec<usize> = (0..msm.len())
-        .filter(|&j| msm.omega[j] > 0.0)
-        .take(2 * r + 8)
-        .collect();
-    let shapes: Vec<Vec<f64>> = modes.iter().map(|m| m.shape.clone()).collect();
-    let omegas: Vec<f64> = modes.iter().map(|m| m.omega).collect();
-    let worst_fitted_mode = match_modes(
-        &shapes,
-        &omegas,
-        &window.iter().map(|&j| msm.mode(j)).collect::<Vec<_>>(),
-    )
-    .iter()
-    .zip(&omegas)
-    .map(|(m, w)| m.map_or(f64::INFINITY, |(j, _)| (msm.omega[window[j]] / w - 1.0).abs()))
-    .fold(0.0, f64::max);
-    Ok(ModalSolution {
-        report: ModalFitReport {
-            classes: class_sums.keys().copied().collect(),
-            constants: class_constants,
-            groups: group_reports,
-            modes: r,
-            fitted_modes: selected.iter().map(|i| i + 1).collect(),
-            mode_frequencies: modes.iter().map(|m| m.omega).collect(),
-            half_waves,
-            mass_regularization: lambda_m,
-            constant_regularization: lambda_k,
-            frequency_weight: FREQUENCY_WEIGHT,
-            relative_residual: (num / den.max(f64::MIN_POSITIVE)).sqrt(),
-            frequency_residual: (rayleigh / r.max(1) as f64).sqrt(),
-            omega1_dnurbs,
-            omega1_fitted,
-            mass_scale,
-            worst_fitted_mode,
-        },
-        constants,
-        masses,
-        basis: msm,
-    })
+        .fold(0.0, f64::max);
+        Ok(ModalSolution {
+            report: ModalFitReport {
+                classes: class_sums.keys().copied().collect(),
+                constants: class_constants,
+                groups: group_reports,
+                modes: r,
+                fitted_modes: selected.iter().map(|i| i + 1).collect(),
+                mode_frequencies: modes.iter().map(|m| m.omega).collect(),
+                half_waves,
+                mass_regularization: lambda_m,
+                constant_regularization: lambda_k,
+                frequency_weight: FREQUENCY_WEIGHT,
+                relative_residual: (num / den.max(f64::MIN_POSITIVE)).sqrt(),
+                frequency_residual: (rayleigh / r.max(1) as f64).sqrt(),
+                omega1_dnurbs,
+                omega1_fitted,
+                mass_scale,
+                worst_fitted_mode,
+            },
+            constants,
+            masses,
+            basis: msm,
+        })
     }
 }
 
@@ -835,7 +838,12 @@ fn solve_with_floor(
         let m = open.len();
         // The held masses move to the right-hand side.
         let s_held: Vec<f64> = (0..rows)
-            .map(|i| (0..n).filter(|&p| held[p]).map(|p| s[(i, p)] * MASS_FLOOR).sum())
+            .map(|i| {
+                (0..n)
+                    .filter(|&p| held[p])
+                    .map(|p| s[(i, p)] * MASS_FLOOR)
+                    .sum()
+            })
             .collect();
         let g_k: Vec<f64> = (0..c)
             .map(|g| {
@@ -1011,7 +1019,10 @@ pub(crate) mod tests {
             for j in 0..c + n {
                 let grad = hz[j] - g[j];
                 if j < c && y[j] == 0.0 {
-                    assert!(grad >= -1e-10, "{trial}: factor {j} at 0 with gradient {grad}");
+                    assert!(
+                        grad >= -1e-10,
+                        "{trial}: factor {j} at 0 with gradient {grad}"
+                    );
                 } else if j >= c && floored[j - c] {
                     assert!(x[j - c] == MASS_FLOOR);
                 } else {
@@ -1097,7 +1108,8 @@ pub(crate) mod tests {
             .collect();
         let (picked, k) = resolved_modes((n_u, n_v), &free, &sampled);
         assert_eq!(k, [4, 3]);
-        let labels: Vec<(usize, usize)> = picked.iter().map(|&i| (modes[i].1, modes[i].2)).collect();
+        let labels: Vec<(usize, usize)> =
+            picked.iter().map(|&i| (modes[i].1, modes[i].2)).collect();
         assert!(labels.iter().all(|&(a, b)| a <= 4 && b <= 3), "{labels:?}");
         // (1,1) … (4,3): 12 modes.
         assert_eq!(labels.len(), 12, "{labels:?}");
@@ -1116,6 +1128,9 @@ pub(crate) mod tests {
             },
         );
         let (picked, _) = resolved_modes((n_u, n_v), &free, &paired);
-        assert!(!picked.contains(&at) && !picked.contains(&(at + 1)), "{picked:?}");
+        assert!(
+            !picked.contains(&at) && !picked.contains(&(at + 1)),
+            "{picked:?}"
+        );
     }
 }

@@ -412,7 +412,11 @@ fn third_differences_are_exact_for_cubics() {
     // 5 × 5 nodes: 2 · 5 stencils along each direction.
     assert_eq!(l.elements.len(), 20);
     for e in &l.elements {
-        let expected = if e.kind == LinearKind::ThirdU { 6.0 } else { -12.0 };
+        let expected = if e.kind == LinearKind::ThirdU {
+            6.0
+        } else {
+            -12.0
+        };
         let s = e.strain(&disp)[2];
         assert!((s - expected).abs() <= 1e-11, "{e:?}: {s}");
         // Constants and linear functions are annihilated too (the strain of f is exact).
