@@ -101,7 +101,7 @@ fn recovers_known_constants() {
                 Class::Spring(SpringKind::Structural) => truth[0],
                 Class::Spring(SpringKind::Shear) => truth[1],
                 Class::Spring(SpringKind::Bend) => truth[2],
-                Class::Linear(..) => unreachable!("a spring lattice"),
+                Class::Linear(..) | Class::Hinge(..) => unreachable!("a spring lattice"),
             };
             assert!(
                 (k[i] - expected).abs() < 1e-11 * expected,
@@ -447,7 +447,7 @@ fn spectral_residual_and_fit_against_closed_forms_and_power_iteration() {
             Class::Spring(SpringKind::Structural) => truth[0],
             Class::Spring(SpringKind::Shear) => truth[1],
             Class::Spring(SpringKind::Bend) => truth[2],
-            Class::Linear(..) => unreachable!(),
+            Class::Linear(..) | Class::Hinge(..) => unreachable!(),
         })
         .collect();
     assert!((fit.relative_spectral_residual(&t).unwrap() - 0.5).abs() < 1e-12);

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
-use crate::{LinearKind, Region, SpringKind};
+use crate::{HingeKind, LinearKind, Region, SpringKind};
 
 /// A class of elements sharing one constant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -18,6 +18,8 @@ pub enum Class {
     Spring(SpringKind),
     /// The linear isotropic elements of one kind in one region.
     Linear(LinearKind, Region),
+    /// The hinges (dihedral-angle bending, docs/math.md §5.2) of one kind.
+    Hinge(HingeKind),
 }
 
 impl Class {
@@ -26,6 +28,12 @@ impl Class {
         Class::Spring(SpringKind::Structural),
         Class::Spring(SpringKind::Shear),
         Class::Spring(SpringKind::Bend),
+    ];
+
+    /// Every hinge class, in report order.
+    pub const HINGES: [Class; 2] = [
+        Class::Hinge(HingeKind::Grid),
+        Class::Hinge(HingeKind::Diagonal),
     ];
 
     /// Every linear class of `kinds`, interior then boundary for each kind.
@@ -37,25 +45,41 @@ impl Class {
     }
 
     /// The name of the class in files and messages: `"structural"`, `"shear"`, `"bend"` for
-    /// springs, `"kind@region"` for linear elements (`"bend_u@boundary"`).
+    /// springs, `"kind@region"` for linear elements (`"bend_u@boundary"`), `"hinge"` and
+    /// `"hinge_diagonal"` for hinges.
     pub fn name(self) -> String {
         match self {
             Class::Spring(kind) => kind.name().to_string(),
             Class::Linear(kind, region) => format!("{}@{}", kind.name(), region.name()),
+            Class::Hinge(kind) => kind.name().to_string(),
         }
     }
 
     /// Parses a [`Class::name`].
+    ///
+    /// ```
+    /// use nurbspring_msm::{Class, HingeKind};
+    /// assert_eq!(Class::parse("hinge_diagonal"), Some(Class::Hinge(HingeKind::Diagonal)));
+    /// ```
     pub fn parse(s: &str) -> Option<Class> {
         if let Some((kind, region)) = s.split_once('@') {
             let region = Region::ALL.into_iter().find(|r| r.name() == region)?;
             return Some(Class::Linear(LinearKind::parse(kind)?, region));
         }
+        if s.starts_with("hinge") {
+            return HingeKind::parse(s).map(Class::Hinge);
+        }
         SpringKind::parse(s).map(Class::Spring)
     }
 
+    /// True for a class of springs or hinges (elements with a rest state, rotation invariant),
+    /// false for linear elements.
+    pub fn is_nonlinear(self) -> bool {
+        !matches!(self, Class::Linear(..))
+    }
+
     /// The symbol of its constant: as the paper writes it for springs (`k_edge`, `k_diag`,
-    /// `k_bend`), the class name for linear elements.
+    /// `k_bend`), `k_hinge` and `k_hinge_diag` for hinges, the class name for linear elements.
     ///
     /// ```
     /// use nurbspring_msm::{Class, LinearKind, Region, SpringKind};
@@ -67,6 +91,7 @@ impl Class {
             Class::Spring(SpringKind::Structural) => "k_edge".to_string(),
             Class::Spring(SpringKind::Shear) => "k_diag".to_string(),
             Class::Spring(SpringKind::Bend) => "k_bend".to_string(),
+            Class::Hinge(kind) => kind.symbol().to_string(),
             Class::Linear(..) => self.name(),
         }
     }

@@ -22,7 +22,8 @@ pub enum MsmError {
     /// A spring, linear element or probe naming a node that does not exist.
     #[error("{of} {index} names node {node}, but the lattice has {n_nodes} nodes")]
     MissingNode {
-        /// What names it: `"spring"`, `"linear element"` or `"probe"` (`probe_nodes`).
+        /// What names it: `"spring"`, `"linear element"`, `"hinge"`, `"triangle"` or `"probe"`
+        /// (`probe_nodes`).
         of: &'static str,
         /// Its index.
         index: usize,
@@ -107,6 +108,26 @@ pub enum MsmError {
         what: String,
         /// The value.
         value: f64,
+    },
+    /// A hinge that breaks a rule of [`crate::SpringLattice::validate`].
+    #[error("hinge {hinge}: invalid {what}: {value}")]
+    InvalidHinge {
+        /// Hinge index.
+        hinge: usize,
+        /// What is wrong.
+        what: String,
+        /// The value.
+        value: f64,
+    },
+    /// Per-element weights of the wrong count for a class.
+    #[error("class {class} has {expected} elements, but {found} weights were given")]
+    WeightCount {
+        /// The class name.
+        class: String,
+        /// Its number of elements.
+        expected: usize,
+        /// Weights given.
+        found: usize,
     },
     /// A NaN or infinite input value, or one beyond ±[`MAX_MAGNITUDE`](nurbspring_sim::MAX_MAGNITUDE).
     #[error("{what} {index} is not a finite number of magnitude at most 1e30 ({value})")]

@@ -4,13 +4,22 @@
 //!
 //! ```json
 //! {"nodes": [{"position": [0, 0, 0], "mass": 1, "fixed": true, "damping": 0, "uv": [0, 0]}, …],
-//!  "springs": [{"a": 0, "b": 1, "kind": "structural", "k": 1, "rest_length": 0.5}, …],
+//!  "springs": [{"a": 0, "b": 1, "kind": "structural", "k": 1, "rest_length": 0.5,
+//!               "weight": 1, "damping": 0}, …],
+//!  "hinges": [{"nodes": [0, 1, 5, 7], "class": "hinge", "k": 0.1, "weight": 1,
+//!              "rest_angle": 0}, …],
+//!  "triangles": [[0, 4, 5], …],
 //!  "gravity": [0, 0, -9.81], "grid": [n_u, n_v],
 //!  "scene": "examples/paper.toml", "initial_velocities": [[0, 0, 0], …],
 //!  "simulation": {"dt": 0.08, "t_end": 4, "integrator": "newmark"}, "probe_nodes": [12, 3]}
 //! ```
 //! `fixed`, `damping`, `uv`, `gravity` and `grid` may be left out (false, 0, none, zero, none);
-//! a spring's `kind` defaults to `"structural"` and its `rest_length` to its initial length.
+//! a spring's `kind` defaults to `"structural"`, its `rest_length` to its initial length, its
+//! `weight` to 1 and its axial `damping` (docs/math.md §5.1) to 0. `hinges` (docs/math.md §5.2:
+//! the edge `nodes[0] → nodes[1]`, the wings `nodes[2]`, `nodes[3]`; `class` `"hinge"` or
+//! `"hinge_diagonal"`, default `"hinge"`; `weight` default 1; `rest_angle` in radians, default
+//! the angle at the initial positions) and `triangles` may be left out (none). A file without
+//! the keys of later versions (weights, damping, hinges) is the same model as before.
 //! `scene` (where the model came from), `initial_velocities` (one per node; zero when left
 //! out; ignored at fixed nodes), `simulation` and `probe_nodes` (the nodes `simulate` records;
 //! the node nearest the centre when left out) are optional. Unknown keys are refused.
@@ -18,9 +27,11 @@
 use nurbspring_sim::IntegratorKind;
 use serde::{Deserialize, Serialize};
 
+use crate::hinge::angle;
 use crate::spring::{norm, sub};
 use crate::{
-    Class, LinearElement, LinearKind, MAX_NODES, MsmError, Spring, SpringKind, SpringLattice,
+    Class, Hinge, HingeKind, LinearElement, LinearKind, MAX_NODES, MsmError, Spring, SpringKind,
+    SpringLattice,
 };
 
 /// One node of an [`MsmFile`].
@@ -81,10 +92,52 @@ pub struct SpringRecord {
     /// Rest length; the initial length when left out.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rest_length: Option<f64>,
+    /// Weight (> 0; the stiffness is `k · weight`); 1 when left out.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub weight: f64,
+    /// Axial damping c (≥ 0, docs/math.md §5.1); 0 when left out.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub damping: f64,
 }
 
 fn structural() -> SpringKind {
     SpringKind::Structural
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+fn grid_hinge() -> HingeKind {
+    HingeKind::Grid
+}
+
+/// One hinge of an [`MsmFile`] (docs/math.md §5.2): energy `½ k weight (θ − rest_angle)²`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HingeRecord {
+    /// The edge `nodes[0] → nodes[1]`, then the wing of the triangle `(nodes[0], nodes[1],
+    /// nodes[2])` and the wing of `(nodes[1], nodes[0], nodes[3])`.
+    pub nodes: [usize; 4],
+    /// `"hinge"` or `"hinge_diagonal"` (default `"hinge"`).
+    #[serde(default = "grid_hinge")]
+    pub class: HingeKind,
+    /// Class constant (≥ 0).
+    pub k: f64,
+    /// Weight (> 0); 1 when left out.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub weight: f64,
+    /// Rest angle [rad] in `[−π, π]`; the angle at the initial positions when left out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rest_angle: Option<f64>,
 }
 
 /// How to run the model, as `derive` records it.
@@ -110,6 +163,13 @@ pub struct MsmFile {
     /// Linear isotropic elements (none when left out).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub elements: Vec<ElementRecord>,
+    /// Hinges (none when left out).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub hinges: Vec<HingeRecord>,
+    /// Triangles of a triangulated lattice, counter-clockwise in the parameter plane (none
+    /// when left out; for exports and viewers, no force depends on them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub triangles: Vec<[usize; 3]>,
     /// Gravity g (default zero).
     #[serde(default)]
     pub gravity: [f64; 3],
@@ -194,6 +254,8 @@ impl SpringLattice {
                     kind: s.kind,
                     k: s.k,
                     rest_length: Some(s.rest_length),
+                    weight: s.weight,
+                    damping: s.damping,
                 })
                 .collect(),
             elements: self
@@ -208,6 +270,18 @@ impl SpringLattice {
                     coefficients: e.coefficients.clone(),
                 })
                 .collect(),
+            hinges: self
+                .hinges
+                .iter()
+                .map(|h| HingeRecord {
+                    nodes: h.nodes,
+                    class: h.kind,
+                    k: h.k,
+                    weight: h.weight,
+                    rest_angle: Some(h.rest_angle),
+                })
+                .collect(),
+            triangles: self.triangles.clone(),
             gravity: self.gravity,
             grid: self.grid.map(|(u, v)| [u, v]),
             scene: None,
@@ -290,6 +364,8 @@ impl SpringLattice {
                 rest_length: s
                     .rest_length
                     .unwrap_or_else(|| norm(sub(positions[s.a], positions[s.b]))),
+                weight: s.weight,
+                damping: s.damping,
             });
         }
         let mut elements = Vec::with_capacity(file.elements.len());
@@ -317,6 +393,26 @@ impl SpringLattice {
                 k: e.k,
             });
         }
+        let mut hinges = Vec::with_capacity(file.hinges.len());
+        for (i, h) in file.hinges.iter().enumerate() {
+            if let Some(&node) = h.nodes.iter().find(|&&a| a >= n) {
+                return Err(MsmError::MissingNode {
+                    of: "hinge",
+                    index: i,
+                    node,
+                    n_nodes: n,
+                });
+            }
+            hinges.push(Hinge {
+                nodes: h.nodes,
+                kind: h.class,
+                k: h.k,
+                weight: h.weight,
+                rest_angle: h
+                    .rest_angle
+                    .unwrap_or_else(|| angle(&h.nodes.map(|a| positions[a]))),
+            });
+        }
         let with_force = file.nodes.iter().filter(|r| r.force.is_some()).count();
         let forces = if with_force == 0 {
             Vec::new()
@@ -328,6 +424,8 @@ impl SpringLattice {
         };
         let lattice = SpringLattice {
             elements,
+            hinges,
+            triangles: file.triangles.clone(),
             forces,
             masses: file.nodes.iter().map(|r| r.mass).collect(),
             damping: file.nodes.iter().map(|r| r.damping).collect(),

@@ -129,7 +129,13 @@ impl GridStep {
     /// generic path runs these).
     pub fn new(lattice: &SpringLattice, external: &[f64]) -> Option<Self> {
         let (n_u, n_v) = lattice.grid?;
-        if n_v < MIN_ROW || n_u == 0 || !lattice.elements.is_empty() || lattice.springs.is_empty() {
+        if n_v < MIN_ROW
+            || n_u == 0
+            || !lattice.elements.is_empty()
+            || !lattice.hinges.is_empty()
+            || lattice.springs.is_empty()
+            || lattice.springs.iter().any(|s| s.damping != 0.0)
+        {
             return None;
         }
         let n = n_u * n_v;
@@ -156,7 +162,7 @@ impl GridStep {
                         dj,
                         j_lo: (-dj).max(0) as usize,
                         j_hi: (n_v as isize - dj.max(0)) as usize,
-                        k: Stiffness::Uniform(s.k),
+                        k: Stiffness::Uniform(s.stiffness()),
                         rest: vec![0.0; n],
                     });
                     filled.push(vec![false; n]);
@@ -169,7 +175,7 @@ impl GridStep {
                 return None;
             }
             dirs[d].rest[slot] = s.rest_length;
-            k_per_spring[d][slot] = s.k;
+            k_per_spring[d][slot] = s.stiffness();
         }
         // Every direction complete: one spring at each lower node that has an upper one.
         for (d, dir) in dirs.iter_mut().enumerate() {

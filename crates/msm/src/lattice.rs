@@ -6,11 +6,13 @@ use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::representable;
 
 use crate::element::grid_elements;
+use crate::hinge::angle;
 use crate::spring::sub;
 use crate::stiffness::Coefficient;
 use crate::topology::Topology;
 use crate::{
-    Class, Constants, LinearElement, LinearKind, MAX_NODES, MsmError, Region, Spring, SpringKind,
+    Class, Constants, Hinge, HingeKind, LinearElement, LinearKind, MAX_NODES, MsmError, Region,
+    Spring, SpringKind,
 };
 
 /// Where the lattice nodes sit in the parameter domain.
@@ -149,7 +151,8 @@ impl Default for LatticeOptions {
 }
 
 /// A mass-spring model (paper eqs. (5)–(7)): nodes with masses, damping and fixed flags,
-/// springs between them, and linear isotropic elements (docs/math.md §8).
+/// springs between them, hinges (docs/math.md §5.2), and linear isotropic elements
+/// (docs/math.md §8).
 ///
 /// Node positions are the initial (rest) positions. Generalized coordinates are interleaved
 /// `[x_0, y_0, z_0, x_1, …]` (docs/math.md §1); on a grid, node `a = i · n_v + j`.
@@ -167,6 +170,12 @@ pub struct SpringLattice {
     pub springs: Vec<Spring>,
     /// The linear isotropic elements (docs/math.md §8).
     pub elements: Vec<LinearElement>,
+    /// The hinges (dihedral-angle bending, docs/math.md §5.2).
+    pub hinges: Vec<Hinge>,
+    /// The triangles of a triangulated lattice ([`SpringLattice::triangulated`]), each
+    /// counter-clockwise in the parameter plane; empty otherwise. Only for exports and for
+    /// people: no force depends on them.
+    pub triangles: Vec<[usize; 3]>,
     /// Constant external force on each node besides gravity (empty: none).
     pub forces: Vec<[f64; 3]>,
     /// `(u, v)` of each node when sampled from a surface.
@@ -209,17 +218,86 @@ impl SpringLattice {
             return Err(MsmError::TooLarge { nodes: n });
         }
         let positions = surface.grid(&us, &vs)?;
-        let fixed = match &options.fixed {
-            FixedNodes::Auto
-                if options.grid == ParameterGrid::Greville
-                    && (us.len(), vs.len()) == (surface.n_u(), surface.n_v()) =>
-            {
-                control_point_fixed(n, fixed_control_points)?
-            }
-            FixedNodes::Auto => auto_fixed(surface, &us, &vs, fixed_control_points)?,
-            FixedNodes::List(list) => listed_fixed(n, list)?,
-        };
+        let fixed = surface_fixed(surface, options, &us, &vs, fixed_control_points)?;
         Self::on_grid(&us, &vs, positions, fixed, options)
+    }
+
+    /// A triangulated lattice on a surface (docs/math.md §5.3): nodes `x_ab = c(u_a, v_b)` on
+    /// the parameter grid of `options` and fixed nodes as in [`SpringLattice::from_surface`];
+    /// each grid cell cut into two triangles along one diagonal, the diagonals alternating
+    /// like a checkerboard (cell `(i, j)` along `(i, j)–(i+1, j+1)` when `i + j` is even,
+    /// along `(i+1, j)–(i, j+1)` otherwise), so the mesh has no preferred direction.
+    ///
+    /// Elements, each class built when `options.constants` holds it, with that constant and
+    /// weight 1: structural springs on the grid-line edges, shear springs on the cells'
+    /// diagonals (one per cell), bending springs between second neighbours as in
+    /// [`SpringLattice::from_surface`], a [`HingeKind::Grid`] hinge on every interior
+    /// grid-line edge and a [`HingeKind::Diagonal`] hinge on every diagonal, with the rest
+    /// angle of the positions, so that the lattice is stress-free at rest (spring rest lengths
+    /// are `(1 − pre_strain) ×` the initial lengths). [`SpringLattice::triangles`] lists the
+    /// triangles.
+    ///
+    /// ```
+    /// use nurbspring_geom::{KnotVector, NurbsSurface};
+    /// use nurbspring_msm::{Class, Constants, HingeKind, LatticeOptions, ParameterGrid, SpringKind, SpringLattice};
+    /// let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
+    /// let s = NurbsSurface::try_new(k.clone(), k, vec![[0., 0., 0.], [0., 1., 0.], [1., 0., 0.], [1., 1., 0.]], vec![1.; 4]).unwrap();
+    /// let constants = Constants::from_pairs([
+    ///     (Class::Spring(SpringKind::Structural), 1.0),
+    ///     (Class::Spring(SpringKind::Shear), 1.0),
+    ///     (Class::Hinge(HingeKind::Grid), 0.1),
+    ///     (Class::Hinge(HingeKind::Diagonal), 0.1),
+    /// ]);
+    /// let opts = LatticeOptions { grid: ParameterGrid::Uniform { nodes_u: 3, nodes_v: 3 }, constants, ..Default::default() };
+    /// let lattice = SpringLattice::triangulated(&s, &opts, &[]).unwrap();
+    /// // 3 × 3 nodes: 12 grid edges and 4 diagonals, 8 triangles, 4 + 4 interior edges.
+    /// assert_eq!((lattice.springs.len(), lattice.triangles.len(), lattice.hinges.len()), (16, 8, 8));
+    /// // Flat at rest: every rest angle is zero, and the lattice is stress-free.
+    /// assert!(lattice.hinges.iter().all(|h| h.rest_angle.abs() < 1e-15));
+    /// ```
+    pub fn triangulated(
+        surface: &NurbsSurface,
+        options: &LatticeOptions,
+        fixed_control_points: &[usize],
+    ) -> Result<Self, MsmError> {
+        options.validate()?;
+        let (us, vs) = options.grid.parameters(surface)?;
+        for (name, count) in [("nodes_u", us.len()), ("nodes_v", vs.len())] {
+            if count < 2 {
+                return Err(MsmError::InvalidOption {
+                    name: name.to_string(),
+                    value: count as f64,
+                    rule: "a triangulated lattice needs at least 2 nodes along each direction",
+                });
+            }
+        }
+        let (n_u, n_v) = (us.len(), vs.len());
+        let positions = surface.grid(&us, &vs)?;
+        let fixed = surface_fixed(surface, options, &us, &vs, fixed_control_points)?;
+        let n = n_u * n_v;
+        let params: Vec<(f64, f64)> = us
+            .iter()
+            .flat_map(|&u| vs.iter().map(move |&v| (u, v)))
+            .collect();
+        let triangles = grid_triangles(n_u, n_v);
+        let springs = triangulated_springs(n_u, n_v, options, &positions);
+        let hinges = triangle_hinges(&triangles, n_v, &positions, &options.constants);
+        let lattice = Self {
+            positions,
+            masses: vec![options.mass; n],
+            damping: vec![options.damping; n],
+            fixed,
+            springs,
+            elements: Vec::new(),
+            hinges,
+            triangles,
+            forces: Vec::new(),
+            params: Some(params),
+            grid: Some((n_u, n_v)),
+            gravity: options.gravity,
+        };
+        lattice.validate()?;
+        Ok(lattice)
     }
 
     /// A chain of nodes `x_a = c(u_a)` on a curve (the one-parameter case of
@@ -294,6 +372,8 @@ impl SpringLattice {
             fixed,
             springs,
             elements,
+            hinges: Vec::new(),
+            triangles: Vec::new(),
             forces: Vec::new(),
             params: Some(params),
             grid: Some((n_u, n_v)),
@@ -324,6 +404,8 @@ impl SpringLattice {
             fixed,
             springs,
             elements: Vec::new(),
+            hinges: Vec::new(),
+            triangles: Vec::new(),
             forces: Vec::new(),
             params: None,
             grid: None,
@@ -335,9 +417,12 @@ impl SpringLattice {
 
     /// Checks the invariants every computation relies on: at least one and at most
     /// [`MAX_NODES`] nodes, per-node arrays of one length, finite positions and gravity,
-    /// masses `> 0`, damping `≥ 0`, springs naming existing nodes, `k ≥ 0`, rest length `≥ 0`,
-    /// every value finite, and no spring of zero length at the initial positions. Also
-    /// `params` and `grid`, when present, must match the number of nodes.
+    /// masses `> 0`, damping `≥ 0`, springs naming existing nodes, `k ≥ 0`, weight `> 0`,
+    /// axial damping `≥ 0`, rest length `≥ 0`, every value finite, and no spring of zero length
+    /// at the initial positions; hinges on four distinct existing nodes, `k ≥ 0`, weight `> 0`,
+    /// rest angle in `[−π, π]`, both triangles of positive area at the initial positions;
+    /// triangles on three distinct existing nodes. Also `params` and `grid`, when present,
+    /// must match the number of nodes.
     pub fn validate(&self) -> Result<(), MsmError> {
         let n = self.positions.len();
         if n > MAX_NODES {
@@ -460,6 +545,18 @@ impl SpringLattice {
                     value: spring.rest_length,
                 });
             }
+            if !(representable(spring.weight) && spring.weight > 0.0) {
+                return Err(MsmError::InvalidParameter {
+                    name: format!("weight of spring {s} (must be in (0, 1e30])"),
+                    value: spring.weight,
+                });
+            }
+            if !(representable(spring.damping) && spring.damping >= 0.0) {
+                return Err(MsmError::InvalidParameter {
+                    name: format!("axial damping of spring {s} (must be in [0, 1e30])"),
+                    value: spring.damping,
+                });
+            }
             let d = sub(self.positions[spring.a], self.positions[spring.b]);
             if d == [0.0; 3] {
                 return Err(MsmError::ZeroLengthSpring {
@@ -508,6 +605,64 @@ impl SpringLattice {
                 return Err(bad("constant k (must be in [0, 1e30])".into(), el.k));
             }
         }
+        for (i, h) in self.hinges.iter().enumerate() {
+            let bad = |what: String, value: f64| MsmError::InvalidHinge {
+                hinge: i,
+                what,
+                value,
+            };
+            for (slot, &a) in h.nodes.iter().enumerate() {
+                if a >= n {
+                    return Err(MsmError::MissingNode {
+                        of: "hinge",
+                        index: i,
+                        node: a,
+                        n_nodes: n,
+                    });
+                }
+                if h.nodes[..slot].contains(&a) {
+                    return Err(bad(format!("nodes (node {a} listed twice)"), a as f64));
+                }
+            }
+            if !(representable(h.k) && h.k >= 0.0) {
+                return Err(bad("constant k (must be in [0, 1e30])".into(), h.k));
+            }
+            if !(representable(h.weight) && h.weight > 0.0) {
+                return Err(bad("weight (must be in (0, 1e30])".into(), h.weight));
+            }
+            if h.rest_angle.is_nan() || h.rest_angle.abs() > std::f64::consts::PI {
+                return Err(bad(
+                    "rest_angle (radians, must be in [-pi, pi])".into(),
+                    h.rest_angle,
+                ));
+            }
+            let x = h.nodes.map(|a| self.positions[a]);
+            if !angle(&x).is_finite() || degenerate(&x) {
+                return Err(bad(
+                    "triangles (one of its two triangles has zero area at the initial positions)"
+                        .into(),
+                    f64::NAN,
+                ));
+            }
+        }
+        for (i, t) in self.triangles.iter().enumerate() {
+            for (slot, &a) in t.iter().enumerate() {
+                if a >= n {
+                    return Err(MsmError::MissingNode {
+                        of: "triangle",
+                        index: i,
+                        node: a,
+                        n_nodes: n,
+                    });
+                }
+                if t[..slot].contains(&a) {
+                    return Err(MsmError::InvalidParameter {
+                        name: format!("triangle {i}: node {a} listed twice"),
+                        value: a as f64,
+                    });
+                }
+            }
+        }
         if !self.forces.is_empty() && self.forces.len() != n {
             return Err(MsmError::LengthMismatch {
                 what: "node forces",
@@ -547,6 +702,7 @@ impl SpringLattice {
             .iter()
             .map(|s| Class::Spring(s.kind))
             .chain(self.elements.iter().map(LinearElement::class))
+            .chain(self.hinges.iter().map(|h| Class::Hinge(h.kind)))
             .collect();
         out.sort_unstable();
         out.dedup();
@@ -558,12 +714,104 @@ impl SpringLattice {
         match class {
             Class::Spring(kind) => self.springs.iter().filter(|s| s.kind == kind).count(),
             Class::Linear(..) => self.elements.iter().filter(|e| e.class() == class).count(),
+            Class::Hinge(kind) => self.hinges.iter().filter(|h| h.kind == kind).count(),
         }
     }
 
-    /// Number of springs and linear elements.
+    /// Number of springs, hinges and linear elements.
     pub fn n_elements(&self) -> usize {
-        self.springs.len() + self.elements.len()
+        self.springs.len() + self.hinges.len() + self.elements.len()
+    }
+
+    /// The weights of the elements of `class`, in the order they appear in the lattice's list
+    /// of springs, hinges or linear elements.
+    pub fn weights(&self, class: Class) -> Vec<f64> {
+        match class {
+            Class::Spring(kind) => self
+                .springs
+                .iter()
+                .filter(|s| s.kind == kind)
+                .map(|s| s.weight)
+                .collect(),
+            Class::Hinge(kind) => self
+                .hinges
+                .iter()
+                .filter(|h| h.kind == kind)
+                .map(|h| h.weight)
+                .collect(),
+            Class::Linear(..) => self
+                .elements
+                .iter()
+                .filter(|e| e.class() == class)
+                .map(|e| e.weight)
+                .collect(),
+        }
+    }
+
+    /// Sets the weights of the elements of `class` (one per element, in the order of
+    /// [`SpringLattice::weights`]): element `e` then has the stiffness `k_c w_e`, so the
+    /// tangent stays `Σ_c k_c G_c` with the weights inside `G_c` (docs/math.md §5). Refused
+    /// (and nothing changed) when the count differs or a weight is not finite and positive.
+    ///
+    /// ```
+    /// use nurbspring_msm::{Class, SpringKind, SpringLattice, Spring};
+    /// let mut l = SpringLattice::from_parts(vec![[0.; 3], [1., 0., 0.]], vec![1.; 2], vec![0.; 2],
+    ///     vec![false; 2], vec![Spring::new(0, 1, SpringKind::Structural, 3.0, 1.0)], [0.; 3]).unwrap();
+    /// l.set_weights(Class::Spring(SpringKind::Structural), &[0.5]).unwrap();
+    /// assert_eq!(l.springs[0].stiffness(), 1.5);
+    /// assert!(l.set_weights(Class::Spring(SpringKind::Structural), &[0.0]).is_err());
+    /// ```
+    pub fn set_weights(&mut self, class: Class, weights: &[f64]) -> Result<(), MsmError> {
+        let count = self.count(class);
+        if weights.len() != count {
+            return Err(MsmError::WeightCount {
+                class: class.name(),
+                expected: count,
+                found: weights.len(),
+            });
+        }
+        if let Some((i, &w)) = weights
+            .iter()
+            .enumerate()
+            .find(|(_, w)| !(representable(**w) && **w > 0.0))
+        {
+            return Err(MsmError::InvalidParameter {
+                name: format!(
+                    "weight {i} of class {} (must be in (0, 1e30])",
+                    class.name()
+                ),
+                value: w,
+            });
+        }
+        let mut w = weights.iter();
+        match class {
+            Class::Spring(kind) => {
+                for s in self.springs.iter_mut().filter(|s| s.kind == kind) {
+                    s.weight = *w.next().expect("counted");
+                }
+            }
+            Class::Hinge(kind) => {
+                for h in self.hinges.iter_mut().filter(|h| h.kind == kind) {
+                    h.weight = *w.next().expect("counted");
+                }
+            }
+            Class::Linear(..) => {
+                for e in self.elements.iter_mut().filter(|e| e.class() == class) {
+                    e.weight = *w.next().expect("counted");
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets the axial damping `c` (docs/math.md §5.1) of every spring of `kind` (`None`:
+    /// every spring); not validated here, [`crate::MsmModel::new`] validates.
+    pub fn set_axial_damping(&mut self, kind: Option<SpringKind>, c: f64) {
+        for s in &mut self.springs {
+            if kind.is_none_or(|k| k == s.kind) {
+                s.damping = c;
+            }
+        }
     }
 
     /// Sets the constant of every element of each class in `constants` (classes not in it are
@@ -579,6 +827,11 @@ impl SpringLattice {
                 e.k = k;
             }
         }
+        for h in &mut self.hinges {
+            if let Some(k) = constants.get(Class::Hinge(h.kind)) {
+                h.k = k;
+            }
+        }
     }
 
     /// The constants of the classes present, read from the first element of each (the
@@ -590,6 +843,9 @@ impl SpringLattice {
         }
         for e in self.elements.iter().rev() {
             out.set(e.class(), e.k);
+        }
+        for h in self.hinges.iter().rev() {
+            out.set(Class::Hinge(h.kind), h.k);
         }
         out
     }
@@ -707,12 +963,13 @@ impl SpringLattice {
     }
 
     /// The elastic forces of paper eq. (5) summed per node at positions `x` (length `3N`,
-    /// interleaved) into `out` (overwritten): `f_a = Σ_b k (l − |d|) d/|d|`, `d = x_a − x_b`.
+    /// interleaved) into `out` (overwritten): `f_a = Σ_b k w (l − |d|) d/|d|`, `d = x_a − x_b`,
+    /// plus the hinges' `−k w (θ − θ0) ∂θ/∂x_a` (docs/math.md §5.2) and the linear elements.
     /// This is the restoring force `−∇E`. Panics when a length is not `3N`.
     ///
     /// ```
     /// use nurbspring_msm::{Spring, SpringKind, SpringLattice};
-    /// let s = Spring { a: 0, b: 1, kind: SpringKind::Structural, k: 4.0, rest_length: 1.0 };
+    /// let s = Spring::new(0, 1, SpringKind::Structural, 4.0, 1.0);
     /// let lattice = SpringLattice::from_parts(vec![[0.; 3], [1., 0., 0.]], vec![1.; 2], vec![0.; 2], vec![false; 2], vec![s], [0.; 3]).unwrap();
     /// let mut f = vec![0.0; 6];
     /// lattice.elastic_forces(&[0., 0., 0., 1.5, 0., 0.], &mut f);  // stretched by 0.5
@@ -730,6 +987,14 @@ impl SpringLattice {
                 out[3 * s.b + c] -= f[c];
             }
         }
+        for h in &self.hinges {
+            let f = h.forces(x);
+            for (&a, fa) in h.nodes.iter().zip(&f) {
+                for c in 0..3 {
+                    out[3 * a + c] += fa[c];
+                }
+            }
+        }
         if !self.elements.is_empty() {
             let u = self.displacements(x);
             for e in &self.elements {
@@ -743,8 +1008,8 @@ impl SpringLattice {
         }
     }
 
-    /// Elastic energy `E = Σ k (|d| − l)² / 2` at positions `x` (docs/math.md §5). Panics when
-    /// `x.len() ≠ 3N`.
+    /// Elastic energy `E = Σ k w (|d| − l)² / 2 + Σ ½ k w (θ − θ0)²` plus the linear elements'
+    /// at positions `x` (docs/math.md §5). Panics when `x.len() ≠ 3N`.
     pub fn elastic_energy(&self, x: &[f64]) -> f64 {
         assert_eq!(
             x.len(),
@@ -752,7 +1017,8 @@ impl SpringLattice {
             "positions: expected {} entries",
             self.n_dofs()
         );
-        let springs: f64 = self.springs.iter().map(|s| s.energy(x)).sum();
+        let springs: f64 = self.springs.iter().map(|s| s.energy(x)).sum::<f64>()
+            + self.hinges.iter().map(|h| h.energy(x)).sum::<f64>();
         if self.elements.is_empty() {
             return springs;
         }
@@ -761,10 +1027,11 @@ impl SpringLattice {
     }
 
     /// The tangent stiffness `K_T = −∂f_elastic/∂x` at `x`, full `3N × 3N` (paper eqs. (9)–(10),
-    /// docs/math.md §5): for each spring the block `B = k [ (l/|d|) n nᵀ + (1 − l/|d|) I ]` enters
-    /// `(a, a)`, `(b, b)` with `+` and `(a, b)`, `(b, a)` with `−`. The pattern holds a full
-    /// 3 × 3 block for every node and every pair joined by a spring (explicit zeros kept), the
-    /// same at every `x`. Panics when `x.len() ≠ 3N`.
+    /// docs/math.md §5): for each spring the block `B = k w [ (l/|d|) n nᵀ + (1 − l/|d|) I ]`
+    /// enters `(a, a)`, `(b, b)` with `+` and `(a, b)`, `(b, a)` with `−`; each hinge adds its
+    /// Hessian `k w (∇θ ∇θᵀ + (θ − θ0) ∇²θ)` (§5.2). The pattern holds a full 3 × 3 block for
+    /// every node and every pair joined by a spring or sharing a hinge (explicit zeros kept),
+    /// the same at every `x`. Panics when `x.len() ≠ 3N`.
     pub fn tangent_stiffness(&self, x: &[f64]) -> SparseMatrix {
         assert_eq!(
             x.len(),
@@ -784,14 +1051,27 @@ impl SpringLattice {
     }
 
     /// The unit-stiffness matrix `G_c` of one class at `x`: the tangent stiffness of the
-    /// elements of `class` with `k = 1` (for springs the geometric term included; both terms
-    /// of eq. (9) are proportional to `k`). When every element of class `c` has constant `k_c`,
-    /// `K_T = Σ_c k_c G_c` (docs/math.md §5). Same pattern as [`SpringLattice::tangent_stiffness`].
+    /// elements of `class` with `k = 1` and their own weights (for springs the geometric term
+    /// included, both terms of eq. (9) being proportional to `k`; for hinges
+    /// `w (∇θ ∇θᵀ + (θ − θ0) ∇²θ)`, which at rest is `w ∇θ ∇θᵀ`). When every element of class
+    /// `c` has constant `k_c`, `K_T = Σ_c k_c G_c` (docs/math.md §5). Same pattern as
+    /// [`SpringLattice::tangent_stiffness`].
+    ///
+    /// ```
+    /// use nurbspring_msm::{Class, Hinge, HingeKind, SpringLattice};
+    /// // One flat hinge, edge along x of length 1, wings at heights 1: at rest
+    /// // G = w ∇θ ∇θᵀ, whose only non-zero entries are in z.
+    /// let x = vec![[0., 0., 0.], [1., 0., 0.], [0.5, 1., 0.], [0.5, -1., 0.]];
+    /// let mut l = SpringLattice::from_parts(x, vec![1.; 4], vec![0.; 4], vec![false; 4], vec![], [0.; 3]).unwrap();
+    /// l.hinges.push(Hinge { nodes: [0, 1, 2, 3], kind: HingeKind::Grid, k: 5.0, weight: 2.0, rest_angle: 0.0 });
+    /// let g = l.unit_stiffness(Class::Hinge(HingeKind::Grid), &l.flat_positions());
+    /// // ∂θ/∂z of wing 2 is −1/h = −1: G(8, 8) = w · 1 = 2.
+    /// assert!((g.get(8, 8) - 2.0).abs() < 1e-15 && g.get(6, 6) == 0.0);
+    /// ```
     pub fn unit_stiffness(&self, class: Class, x: &[f64]) -> SparseMatrix {
-        let kind = match class {
-            Class::Spring(kind) => kind,
-            Class::Linear(..) => return self.linear_matrix(Some(class)).kron_identity(3),
-        };
+        if let Class::Linear(..) = class {
+            return self.linear_matrix(Some(class)).kron_identity(3);
+        }
         assert_eq!(
             x.len(),
             self.n_dofs(),
@@ -801,8 +1081,14 @@ impl SpringLattice {
         let topology = Topology::all_nodes(self);
         let pattern = topology.pattern();
         let mut g = pattern.template.clone();
-        topology.fill(&pattern, x, &Coefficient::Unit(kind), g.values_mut());
+        topology.fill(&pattern, x, &Coefficient::Unit(class), g.values_mut());
         g
+    }
+
+    /// The hinges' dihedral angles `θ` at `x` (interleaved), in the order of
+    /// [`SpringLattice::hinges`].
+    pub fn hinge_angles(&self, x: &[f64]) -> Vec<f64> {
+        self.hinges.iter().map(|h| h.angle(x)).collect()
     }
 
     /// Current spring lengths at `x`.
@@ -869,6 +1155,167 @@ impl ParameterGrid {
         };
         Ok(out)
     }
+}
+
+/// The fixed nodes of a lattice on `surface` at the parameters `us × vs` (the rule of
+/// [`SpringLattice::from_surface`]).
+fn surface_fixed(
+    surface: &NurbsSurface,
+    options: &LatticeOptions,
+    us: &[f64],
+    vs: &[f64],
+    fixed_control_points: &[usize],
+) -> Result<Vec<bool>, MsmError> {
+    let n = us.len() * vs.len();
+    match &options.fixed {
+        FixedNodes::Auto
+            if options.grid == ParameterGrid::Greville
+                && (us.len(), vs.len()) == (surface.n_u(), surface.n_v()) =>
+        {
+            control_point_fixed(n, fixed_control_points)
+        }
+        FixedNodes::Auto => auto_fixed(surface, us, vs, fixed_control_points),
+        FixedNodes::List(list) => listed_fixed(n, list),
+    }
+}
+
+/// True when a triangle of the hinge at `x` has zero area or its edge zero length.
+fn degenerate(x: &[[f64; 3]; 4]) -> bool {
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let e = sub(x[1], x[0]);
+    let n1 = cross(e, sub(x[2], x[0]));
+    let n2 = cross(sub(x[3], x[0]), e);
+    e == [0.0; 3] || n1 == [0.0; 3] || n2 == [0.0; 3]
+}
+
+/// The triangles of an `n_u × n_v` grid (node `i · n_v + j`), two per cell, cell `(i, j)` cut
+/// along `(i, j)–(i+1, j+1)` when `i + j` is even and along `(i+1, j)–(i, j+1)` otherwise;
+/// each triangle counter-clockwise in the `(u, v)` plane. Cells in node order, the triangle
+/// below the diagonal first.
+///
+/// ```
+/// use nurbspring_msm::grid_triangles;
+/// // 2 × 3 nodes, two cells: the first cut along (0,0)–(1,1), the second along (1,1)–(0,2).
+/// assert_eq!(grid_triangles(2, 3), vec![[0, 3, 4], [0, 4, 1], [1, 4, 2], [4, 5, 2]]);
+/// ```
+pub fn grid_triangles(n_u: usize, n_v: usize) -> Vec<[usize; 3]> {
+    let idx = |i: usize, j: usize| i * n_v + j;
+    let mut out = Vec::with_capacity(2 * n_u.saturating_sub(1) * n_v.saturating_sub(1));
+    for i in 0..n_u.saturating_sub(1) {
+        for j in 0..n_v.saturating_sub(1) {
+            let (p00, p10, p11, p01) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+            if (i + j) % 2 == 0 {
+                out.push([p00, p10, p11]);
+                out.push([p00, p11, p01]);
+            } else {
+                out.push([p00, p10, p01]);
+                out.push([p10, p11, p01]);
+            }
+        }
+    }
+    out
+}
+
+/// Springs on the edges of [`grid_triangles`]: structural `(i, j)–(i, j+1)` and
+/// `(i, j)–(i+1, j)`, then one shear spring per cell on its diagonal, then bending springs as
+/// in `grid_springs`; each group in node order, each class when `o.constants` holds it.
+fn triangulated_springs(
+    n_u: usize,
+    n_v: usize,
+    o: &LatticeOptions,
+    positions: &[[f64; 3]],
+) -> Vec<Spring> {
+    let idx = |i: usize, j: usize| i * n_v + j;
+    let mut springs = grid_springs(n_u, n_v, &without_shear(o), positions);
+    if !o.constants.contains(Class::Spring(SpringKind::Shear)) {
+        return springs;
+    }
+    let k = o.constants.value(Class::Spring(SpringKind::Shear));
+    let scale = 1.0 - o.pre_strain;
+    let mut shear = Vec::new();
+    for i in 0..n_u.saturating_sub(1) {
+        for j in 0..n_v.saturating_sub(1) {
+            let (a, b) = if (i + j) % 2 == 0 {
+                (idx(i, j), idx(i + 1, j + 1))
+            } else {
+                (idx(i + 1, j), idx(i, j + 1))
+            };
+            let l = crate::spring::norm(sub(positions[a], positions[b]));
+            shear.push(Spring::new(a, b, SpringKind::Shear, k, scale * l));
+        }
+    }
+    // Structural first, then shear, then bending (the order of `grid_springs`).
+    let split = springs
+        .iter()
+        .position(|s| s.kind == SpringKind::Bend)
+        .unwrap_or(springs.len());
+    springs.splice(split..split, shear);
+    springs
+}
+
+/// `o` without its shear class.
+fn without_shear(o: &LatticeOptions) -> LatticeOptions {
+    let mut o = o.clone();
+    o.constants.remove(Class::Spring(SpringKind::Shear));
+    o
+}
+
+/// A hinge on every edge shared by two of `triangles` (consistently oriented), of kind
+/// [`HingeKind::Grid`] on a grid line of the `· × n_v` grid and [`HingeKind::Diagonal`]
+/// otherwise, each kind when `constants` holds it, with the rest angle of `positions`;
+/// sorted by kind, then by the edge's nodes.
+fn triangle_hinges(
+    triangles: &[[usize; 3]],
+    n_v: usize,
+    positions: &[[f64; 3]],
+    constants: &Constants,
+) -> Vec<Hinge> {
+    use std::collections::HashMap;
+    // Edge (low, high) → (from, to, opposite node) of the first triangle holding it.
+    let mut first: HashMap<(usize, usize), (usize, usize, usize)> = HashMap::new();
+    let mut hinges = Vec::new();
+    for t in triangles {
+        for c in 0..3 {
+            let (from, to, opposite) = (t[c], t[(c + 1) % 3], t[(c + 2) % 3]);
+            let key = (from.min(to), from.max(to));
+            match first.remove(&key) {
+                None => {
+                    first.insert(key, (from, to, opposite));
+                }
+                Some((f0, t0, o0)) => {
+                    debug_assert_eq!((f0, t0), (to, from), "consistently oriented triangles");
+                    let on_grid_line = f0 / n_v == t0 / n_v || f0 % n_v == t0 % n_v;
+                    let kind = if on_grid_line {
+                        HingeKind::Grid
+                    } else {
+                        HingeKind::Diagonal
+                    };
+                    let Some(k) = constants.get(Class::Hinge(kind)) else {
+                        continue;
+                    };
+                    let nodes = [f0, t0, o0, opposite];
+                    hinges.push(Hinge {
+                        nodes,
+                        kind,
+                        k,
+                        weight: 1.0,
+                        rest_angle: angle(&nodes.map(|a| positions[a])),
+                    });
+                }
+            }
+        }
+    }
+    hinges.sort_by_key(|h| {
+        let [a, b, ..] = h.nodes;
+        (h.kind, a.min(b), a.max(b))
+    });
+    hinges
 }
 
 /// The fixed flags of an explicit node list.
@@ -1007,13 +1454,7 @@ fn grid_springs(n_u: usize, n_v: usize, o: &LatticeOptions, positions: &[[f64; 3
         .map(|(a, b, kind)| {
             let k = o.constants.value(Class::Spring(kind));
             let length = crate::spring::norm(sub(positions[a], positions[b]));
-            Spring {
-                a,
-                b,
-                kind,
-                k,
-                rest_length: scale * length,
-            }
+            Spring::new(a, b, kind, k, scale * length)
         })
         .collect()
 }

@@ -2,20 +2,22 @@
 //!
 //! Equation of motion (paper eq. (7), docs/math.md §5, with the damping sign fixed to `−γ ẋ`):
 //! ```text
-//! m_a ẍ_a = f_elastic,a(x) − γ_a ẋ_a + m_a g
+//! m_a ẍ_a = f_elastic,a(x) − γ_a ẋ_a − Σ_springs c ((ẋ_a − ẋ_b)·n) n + m_a g
 //! ```
-//! In the form of the dynamics contract, `M q̈ + D q̇ + f_int(q) = f_ext(t)` on the free
+//! In the form of the dynamics contract, `M q̈ + (D + C(q)) q̇ + f_int(q) = f_ext(t)` on the free
 //! coordinates `q` (fixed nodes held at their initial positions): `M = diag(m_a) ⊗ I_3`,
-//! `D = diag(γ_a) ⊗ I_3`, `f_int = −f_elastic` (the sign of a stiffness) and
-//! `f_ext = m_a g` (constant). The tangent `∂f_int/∂q` is `K_T` of paper eqs. (9)–(10)
-//! restricted to the free coordinates.
+//! `D = diag(γ_a) ⊗ I_3` (the constant [`DynamicModel::damping`]), `C(q)` the springs' axial
+//! dashpots along their current directions (docs/math.md §5.1, the model's
+//! [`DynamicModel::configuration_damping`]), `f_int = −f_elastic` (springs and hinges, the
+//! sign of a stiffness) and `f_ext = m_a g` (constant). The tangent `∂f_int/∂q` is `K_T` of
+//! paper eqs. (9)–(10) and the hinges' Hessians restricted to the free coordinates.
 
 use std::sync::OnceLock;
 
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::{
-    DofMap, DynamicModel, FusedStep, IntegratorKind, StabilityLimit, State, SystemMatrix,
-    stability_limit,
+    ConfigurationDamping, DofMap, DynamicModel, FusedStep, IntegratorKind, StabilityLimit, State,
+    SystemMatrix, stability_limit,
 };
 
 use crate::grid::GridStep;
@@ -183,7 +185,7 @@ impl MsmModel {
     /// `tangent_stiffness(q) = Σ_c k_c G_c` when every element of class `c` has constant `k_c`).
     pub fn unit_stiffness(&self, class: Class, q: &[f64]) -> SparseMatrix {
         match class {
-            Class::Spring(kind) => self.assemble(q, &Coefficient::Unit(kind)),
+            Class::Spring(_) | Class::Hinge(_) => self.assemble(q, &Coefficient::Unit(class)),
             Class::Linear(..) => {
                 let free = self.free_nodes();
                 self.lattice
@@ -203,9 +205,10 @@ impl MsmModel {
         self.grid_step.as_ref().map(GridStep::traffic_bytes)
     }
 
-    /// True when the model has no springs: its force is linear, `f_int = (L_ff ⊗ I₃)(q − q₀)`.
+    /// True when the model has no springs and no hinges: its force is linear,
+    /// `f_int = (L_ff ⊗ I₃)(q − q₀)`.
     pub fn is_linear(&self) -> bool {
-        self.lattice.springs.is_empty()
+        self.lattice.springs.is_empty() && self.lattice.hinges.is_empty()
     }
 
     fn tangent_pattern(&self) -> &TangentPattern {
@@ -241,6 +244,7 @@ impl std::fmt::Debug for MsmModel {
             .field("nodes", &self.lattice.n_nodes())
             .field("free_nodes", &self.topology.n_active())
             .field("springs", &self.lattice.springs.len())
+            .field("hinges", &self.lattice.hinges.len())
             .field("damped", &self.damping.is_some())
             .field("fused_step", &self.grid_step.is_some())
             .finish()
@@ -261,8 +265,8 @@ impl DynamicModel for MsmModel {
         self.damping.as_ref()
     }
 
-    /// `f_int(q) = −f_elastic(q)` (paper eq. (5)): `Σ_b k (1 − l/|d|) d` per free node.
-    /// Allocation-free and parallel over chunks of nodes.
+    /// `f_int(q) = −f_elastic(q)` (paper eq. (5) and docs/math.md §5.2): `Σ_b k w (1 − l/|d|) d`
+    /// per free node plus the hinges' `k w (θ − θ0) ∂θ/∂x`. Parallel over chunks of nodes.
     fn internal_force(&self, q: &[f64], out: &mut [f64]) {
         self.check_len("internal_force q", q.len());
         self.check_len("internal_force out", out.len());
@@ -287,19 +291,25 @@ impl DynamicModel for MsmModel {
         self.tangent(q, &Coefficient::Stiffness)
     }
 
-    /// `K_T` with the geometric term of compressed springs dropped (positive semi-definite;
-    /// the linear elements are kept as they are).
+    /// `K_T` with the geometric term of compressed springs dropped and the hinges'
+    /// Gauss–Newton part `k w ∇θ ∇θᵀ` only (positive semi-definite; the linear elements are
+    /// kept as they are).
     fn projected_tangent_stiffness(&self, q: &[f64]) -> Option<SparseMatrix> {
         self.check_len("projected_tangent_stiffness q", q.len());
         Some(self.tangent(q, &Coefficient::ProjectedStiffness))
     }
 
-    /// `Σ_springs k (I on the diagonal blocks, −I off them)` plus the linear elements: each
-    /// spring's block `B = k [(l/r) n nᵀ + (1 − l/r) I]` has the eigenvalues `k` and
-    /// `k (1 − l/r) < k`, so `B ⪯ k I` (for `k ≥ 0`, which [`MsmModel::new`] requires) and
-    /// `K_T(q) ⪯ K̄` at every configuration (docs/math.md §5).
+    /// `Σ_springs k w (I on the diagonal blocks, −I off them)` plus the linear elements: each
+    /// spring's block `B = k w [(l/r) n nᵀ + (1 − l/r) I]` has the eigenvalues `k w` and
+    /// `k w (1 − l/r) < k w`, so `B ⪯ k w I` (for `k w ≥ 0`, which [`MsmModel::new`] requires)
+    /// and `K_T(q) ⪯ K̄` at every configuration (docs/math.md §5). `None` with hinges: a hinge's
+    /// Hessian grows without bound as a triangle flattens (`∂θ/∂x` scales as `1/h`), so the
+    /// explicit schemes run below the limit at a state instead.
     fn stiffness_bound(&self) -> Option<SparseMatrix> {
-        Some(self.tangent(&self.q0, &Coefficient::Bound))
+        self.lattice
+            .hinges
+            .is_empty()
+            .then(|| self.tangent(&self.q0, &Coefficient::Bound))
     }
 
     /// `L_ff ⊗ I₃` when the model has no springs (docs/math.md §8).
@@ -307,7 +317,7 @@ impl DynamicModel for MsmModel {
         self.linear.as_ref().filter(|_| self.is_linear())
     }
 
-    /// Elastic energy of every spring, those to fixed nodes included.
+    /// Elastic energy of every spring and hinge, those among fixed nodes included.
     fn potential_energy(&self, q: &[f64]) -> f64 {
         self.check_len("potential_energy q", q.len());
         let (x, _) = q.as_chunks::<3>();
@@ -331,6 +341,13 @@ impl DynamicModel for MsmModel {
         self.grid_step.as_ref().map(|g| g as &dyn FusedStep)
     }
 
+    /// The springs' axial dashpots (docs/math.md §5.1), when a spring has one.
+    fn configuration_damping(&self) -> Option<&dyn ConfigurationDamping> {
+        self.topology
+            .is_damped()
+            .then_some(self as &dyn ConfigurationDamping)
+    }
+
     /// `−(q − q_0)ᵀ f_ext`: the potential of the constant gravity load, zero at the initial
     /// positions (so the total energy starts at the elastic plus kinetic energy).
     fn external_potential(&self, _t: f64, q: &[f64]) -> f64 {
@@ -339,5 +356,25 @@ impl DynamicModel for MsmModel {
             .zip(&self.external)
             .map(|((q, q0), f)| (q - q0) * f)
             .sum::<f64>()
+    }
+}
+
+/// The springs' axial dashpots: `C(q) v` with `C = c n nᵀ` on each damped spring's two nodes
+/// (`+` on the diagonal blocks, `−` off them), `n` its current direction (docs/math.md §5.1).
+impl ConfigurationDamping for MsmModel {
+    fn add_damping_force(&self, q: &[f64], v: &[f64], out: &mut [f64]) {
+        self.check_len("add_damping_force q", q.len());
+        self.check_len("add_damping_force v", v.len());
+        self.check_len("add_damping_force out", out.len());
+        let (x, _) = q.as_chunks::<3>();
+        let (v, _) = v.as_chunks::<3>();
+        let (f, _) = out.as_chunks_mut::<3>();
+        self.topology.add_damping_forces(x, v, f);
+    }
+
+    /// On the pattern of the tangent stiffness.
+    fn damping_matrix(&self, q: &[f64]) -> SparseMatrix {
+        self.check_len("damping_matrix q", q.len());
+        self.assemble(q, &Coefficient::AxialDamping)
     }
 }

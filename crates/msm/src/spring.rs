@@ -58,7 +58,13 @@ impl std::fmt::Display for SpringKind {
     }
 }
 
-/// A linear spring between nodes `a` and `b` (paper eq. (5)): stiffness `k`, rest length `l`.
+/// A linear spring between nodes `a` and `b` (paper eq. (5)): class constant `k`, weight `w`
+/// (its stiffness is `k w`), rest length `l`, and an optional dashpot `c` along it.
+///
+/// The weight carries what differs from spring to spring within a class (a derivation's
+/// geometric factor); `K_S = Σ_c k_c G_c` with `G_c = Σ_{s ∈ c} w_s B_s(k = 1)`
+/// (docs/math.md §5). Every builder makes `w = 1`, so a lattice without weights is the
+/// paper's.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Spring {
     /// First node.
@@ -67,10 +73,21 @@ pub struct Spring {
     pub b: usize,
     /// Class of the spring.
     pub kind: SpringKind,
-    /// Stiffness `k ≥ 0`.
+    /// Class constant `k ≥ 0`.
     pub k: f64,
     /// Rest length `l ≥ 0`.
     pub rest_length: f64,
+    /// Weight `w > 0` (the stiffness is `k w`; 1 unless a derivation sets it).
+    #[serde(default = "one")]
+    pub weight: f64,
+    /// Axial damping `c ≥ 0`: the force `−c ((v_a − v_b)·n) n` on `a` and its negative on `b`,
+    /// `n` the spring's current direction (docs/math.md §5.1).
+    #[serde(default)]
+    pub damping: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// `x_a − x_b`.
@@ -131,41 +148,65 @@ pub(crate) fn stiffness_block_with(k: f64, l: f64, d: [f64; 3], project: bool) -
 }
 
 impl Spring {
+    /// A spring of class constant `k` and rest length `l`, weight 1, no damping.
+    ///
+    /// ```
+    /// use nurbspring_msm::{Spring, SpringKind};
+    /// let s = Spring::new(0, 1, SpringKind::Shear, 2.0, 1.5);
+    /// assert_eq!((s.weight, s.damping, s.stiffness()), (1.0, 0.0, 2.0));
+    /// ```
+    pub fn new(a: usize, b: usize, kind: SpringKind, k: f64, rest_length: f64) -> Self {
+        Self {
+            a,
+            b,
+            kind,
+            k,
+            rest_length,
+            weight: 1.0,
+            damping: 0.0,
+        }
+    }
+
+    /// Its stiffness `k w`.
+    pub fn stiffness(&self) -> f64 {
+        self.k * self.weight
+    }
+
     /// Current length `|x_a − x_b|` for interleaved positions `x` (docs/math.md §1 ordering). Like every
     /// per-spring method, panics when a node index is out of range of `x`.
     pub fn length(&self, x: &[f64]) -> f64 {
         norm(sub(node(x, self.a), node(x, self.b)))
     }
 
-    /// Elastic force on node `a` (paper eq. (5)): `k (l − |d|) d/|d|`; node `b` gets its negative.
+    /// Elastic force on node `a` (paper eq. (5)): `k w (l − |d|) d/|d|`; node `b` gets its negative.
     ///
     /// ```
     /// use nurbspring_msm::{Spring, SpringKind};
-    /// let s = Spring { a: 0, b: 1, kind: SpringKind::Structural, k: 2.0, rest_length: 1.0 };
+    /// let s = Spring::new(0, 1, SpringKind::Structural, 2.0, 1.0);
     /// // Stretched to length 1.5 along x: the force pulls a towards b.
     /// let f = s.force_on_a(&[1.5, 0., 0., 0., 0., 0.]);
     /// assert!((f[0] + 1.0).abs() < 1e-15 && f[1] == 0.0 && f[2] == 0.0);
     /// ```
     pub fn force_on_a(&self, x: &[f64]) -> [f64; 3] {
         let d = sub(node(x, self.a), node(x, self.b));
-        let s = -internal_coefficient(self.k, self.rest_length, d);
+        let s = -internal_coefficient(self.stiffness(), self.rest_length, d);
         [s * d[0], s * d[1], s * d[2]]
     }
 
-    /// Elastic energy `k (|d| − l)² / 2` (docs/math.md §5).
+    /// Elastic energy `k w (|d| − l)² / 2` (docs/math.md §5).
     pub fn energy(&self, x: &[f64]) -> f64 {
         energy(
-            self.k,
+            self.stiffness(),
             self.rest_length,
             sub(node(x, self.a), node(x, self.b)),
         )
     }
 
-    /// The block `B = −∂f_a/∂x_a = k [ (l/|d|) n nᵀ + (1 − l/|d|) I ]` of paper eq. (9)
+    /// The block `B = −∂f_a/∂x_a = k w [ (l/|d|) n nᵀ + (1 − l/|d|) I ]` of paper eq. (9)
     /// (docs/math.md §5), row-major.
     pub fn stiffness_block(&self, x: &[f64]) -> [[f64; 3]; 3] {
         stiffness_block(
-            self.k,
+            self.stiffness(),
             self.rest_length,
             sub(node(x, self.a), node(x, self.b)),
         )

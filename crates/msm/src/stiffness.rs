@@ -2,36 +2,44 @@
 //! docs/math.md §5), on a block pattern computed once.
 //!
 //! The pattern has a dense 3 × 3 block for every active node (diagonal) and for every pair of
-//! active nodes joined by at least one spring. In compressed-column storage the three columns
-//! of node `a` are contiguous and each holds the same rows (the blocks of `a`'s neighbours and
-//! of `a`, ascending), so node `a` owns the value range `col_ptr[3a] .. col_ptr[3a + 3]` and
-//! fills it alone: entry `(3b + r, 3a + c)` sits at offset `c · 3 s_a + 3 pos_a(b) + r`, with
-//! `s_a` the number of blocks in the column and `pos_a(b)` the rank of `b` among them. Values
-//! are filled in parallel, without locks.
+//! active nodes joined by at least one spring or sharing a hinge. In compressed-column storage
+//! the three columns of node `a` are contiguous and each holds the same rows (the blocks of
+//! `a`'s neighbours and of `a`, ascending), so node `a` owns the value range
+//! `col_ptr[3a] .. col_ptr[3a + 3]` and fills it alone: entry `(3b + r, 3a + c)` sits at offset
+//! `c · 3 s_a + 3 pos_a(b) + r`, with `s_a` the number of blocks in the column and `pos_a(b)`
+//! the rank of `b` among them. Values are filled in parallel, without locks; a hinge's
+//! 12 × 12 block is computed by each of its active nodes for its own three columns.
 
 use nurbspring_linalg::SparseMatrix;
 use rayon::prelude::*;
 
-use crate::SpringKind;
+use crate::Class;
+use crate::hinge::hinge_blocks;
 use crate::spring::{stiffness_block_with, sub};
-use crate::topology::Topology;
+use crate::topology::{FIXED, Topology};
 
 /// Nodes per rayon task when filling values.
 const CHUNK_NODES: usize = 1024;
 
-/// Which spring constant multiplies each block.
+/// Which constant multiplies each element's block.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Coefficient {
-    /// The spring's own `k`: the tangent stiffness `K_T`.
+    /// The element's own `k w`: the tangent stiffness `K_T`.
     Stiffness,
-    /// The spring's own `k` with the geometric term of compressed springs dropped: the
-    /// positive semi-definite part of `K_T` (see `stiffness_block_with`).
+    /// The element's own `k w` with the geometric term of compressed springs dropped and the
+    /// hinges' Gauss–Newton part `k w ∇θ ∇θᵀ` only: a positive semi-definite part of `K_T`
+    /// (see `stiffness_block_with` and `Hinge::stiffness_blocks`).
     ProjectedStiffness,
-    /// `1` for springs of this kind, `0` otherwise: the unit matrix `G_c`.
-    Unit(SpringKind),
-    /// The spring's own `k` times the identity block, `k I ⪰ B` at any length (B's
-    /// eigenvalues are `k` along the spring and `k (1 − l/r) < k` across it): the stiffness
-    /// bound `K̄ ⪰ K_T(q)` of [`crate::MsmModel`]'s `stiffness_bound`.
+    /// The weight `w` for the elements of this class, `0` otherwise: the unit matrix `G_c`.
+    Unit(Class),
+    /// The spring's own `k w` times the identity block, `k w I ⪰ B` at any length (B's
+    /// eigenvalues are `k w` along the spring and `k w (1 − l/r) < k w` across it): the
+    /// stiffness bound `K̄ ⪰ K_T(q)` of [`crate::MsmModel`]'s `stiffness_bound` (springs only;
+    /// hinges have no such bound).
     Bound,
+    /// The axial damping `c n nᵀ` of each spring (docs/math.md §5.1): the damping matrix
+    /// `C(x)`.
+    AxialDamping,
 }
 
 /// The block pattern of a [`Topology`] and a template matrix with that pattern.
@@ -47,16 +55,21 @@ pub(crate) struct TangentPattern {
     diag: Vec<u32>,
     /// Rank of the other node's block, per active–active incidence.
     slot: Vec<u32>,
+    /// Ranks of the four hinge nodes in the column of the node, per hinge incidence
+    /// (`u32::MAX` for a fixed node).
+    hinge_slots: Vec<[u32; 4]>,
 }
 
 impl Topology {
     /// The block pattern of `K_T` on the active nodes (computed once per topology).
     pub fn pattern(&self) -> TangentPattern {
         let n = self.n_active();
+        let hinges = &self.hinges;
         let mut start = Vec::with_capacity(n + 1);
         let mut blocks = Vec::with_capacity(n);
         let mut diag = Vec::with_capacity(n);
         let mut slot = vec![0u32; self.other.len()];
+        let mut hinge_slots = vec![[u32::MAX; 4]; hinges.incidence.len()];
         let mut col_nodes: Vec<u32> = Vec::new();
         let mut col_ptr = Vec::with_capacity(3 * n + 1);
         let mut row_idx: Vec<usize> = Vec::new();
@@ -67,18 +80,25 @@ impl Topology {
             col_nodes.clear();
             col_nodes.extend_from_slice(&self.other[lo..hi]);
             col_nodes.push(a as u32);
+            let (hlo, hhi) = (hinges.off[a], hinges.off[a + 1]);
+            for &(h, _) in &hinges.incidence[hlo..hhi] {
+                col_nodes.extend(hinges.nodes[h as usize].iter().filter(|&&i| i & FIXED == 0));
+            }
             col_nodes.sort_unstable();
             col_nodes.dedup();
-            for e in lo..hi {
-                slot[e] = col_nodes
-                    .binary_search(&self.other[e])
-                    .expect("neighbour in its column") as u32;
-            }
-            diag.push(
+            let rank = |b: u32| {
                 col_nodes
-                    .binary_search(&(a as u32))
-                    .expect("diagonal block") as u32,
-            );
+                    .binary_search(&b)
+                    .expect("neighbour in its column") as u32
+            };
+            for e in lo..hi {
+                slot[e] = rank(self.other[e]);
+            }
+            for (e, &(h, _)) in (hlo..hhi).zip(&hinges.incidence[hlo..hhi]) {
+                hinge_slots[e] = hinges.nodes[h as usize]
+                    .map(|i| if i & FIXED != 0 { u32::MAX } else { rank(i) });
+            }
+            diag.push(rank(a as u32));
             blocks.push(col_nodes.len() as u32);
             start.push(acc);
             for _ in 0..3 {
@@ -99,13 +119,16 @@ impl Topology {
             blocks,
             diag,
             slot,
+            hinge_slots,
         }
     }
 
-    /// Fills `values` (of a matrix with `pattern`) with `Σ_springs coef · B` blocks at the active
-    /// positions `x` (interleaved): `+B` on the diagonal blocks, `−B` off the diagonal, where
-    /// `B = k [ (l/|d|) n nᵀ + (1 − l/|d|) I ]` (paper eq. (9)). Springs to fixed nodes
-    /// contribute to the diagonal block only.
+    /// Fills `values` (of a matrix with `pattern`) with the elements' blocks at the active
+    /// positions `x` (interleaved), each scaled as `coef` says: for springs `+B` on the
+    /// diagonal blocks and `−B` off the diagonal, where `B = k w [ (l/|d|) n nᵀ + (1 − l/|d|) I ]`
+    /// (paper eq. (9)); springs to fixed nodes contribute to the diagonal block only. For
+    /// hinges the 12 × 12 Hessian `k w (∇θ ∇θᵀ + (θ − θ0) ∇²θ)` (docs/math.md §5.2), the rows
+    /// and columns of fixed nodes left out.
     pub fn fill(
         &self,
         pattern: &TangentPattern,
@@ -122,14 +145,29 @@ impl Topology {
         );
         let (x, _) = x.as_chunks::<3>();
         let project = matches!(coef, Coefficient::ProjectedStiffness);
-        let bound = matches!(coef, Coefficient::Bound);
-        let block_of = |k: f64, l: f64, d: [f64; 3]| {
-            if bound {
-                [[k, 0.0, 0.0], [0.0, k, 0.0], [0.0, 0.0, k]]
-            } else {
-                stiffness_block_with(k, l, d, project)
+        let block_of = |k: f64, l: f64, d: [f64; 3]| match coef {
+            Coefficient::Bound => [[k, 0.0, 0.0], [0.0, k, 0.0], [0.0, 0.0, k]],
+            Coefficient::AxialDamping => {
+                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                let mut b = [[0.0; 3]; 3];
+                for i in 0..3 {
+                    for j in 0..3 {
+                        b[i][j] = k * d[i] * d[j] / r2;
+                    }
+                }
+                b
             }
+            _ => stiffness_block_with(k, l, d, project),
         };
+        let damping = matches!(coef, Coefficient::AxialDamping);
+        let hinges = &self.hinges;
+        let with_hinges = hinges.len() > 0
+            && !matches!(
+                coef,
+                Coefficient::Bound
+                    | Coefficient::AxialDamping
+                    | Coefficient::Unit(Class::Spring(_) | Class::Linear(..))
+            );
         // Split the values into chunks of whole nodes.
         let mut chunks: Vec<(usize, &mut [f64])> = Vec::with_capacity(n.div_ceil(CHUNK_NODES));
         let mut rest = values;
@@ -148,9 +186,20 @@ impl Topology {
                 let stride = 3 * pattern.blocks[a] as usize;
                 let diag = 3 * pattern.diag[a] as usize;
                 let xa = x[a];
+                let spring_k = |kw: f64, s: u32, e: usize, fixed: bool| -> Option<f64> {
+                    if damping {
+                        let c = if fixed {
+                            self.damping_fixed.get(e)
+                        } else {
+                            self.damping.get(e)
+                        };
+                        return c.copied().filter(|&c| c != 0.0);
+                    }
+                    coef.value(kw, self.spring_class[s as usize])
+                };
                 for e in self.off[a]..self.off[a + 1] {
                     let [k, l] = self.kl[e];
-                    let Some(k) = coef.value(k, self.spring[e], &self.kinds) else {
+                    let Some(k) = spring_k(k, self.spring[e], e, false) else {
                         continue;
                     };
                     let block = block_of(k, l, sub(xa, x[self.other[e] as usize]));
@@ -160,11 +209,28 @@ impl Topology {
                 }
                 for e in self.off_fixed[a]..self.off_fixed[a + 1] {
                     let [k, l] = self.kl_fixed[e];
-                    let Some(k) = coef.value(k, self.spring_fixed[e], &self.kinds) else {
+                    let Some(k) = spring_k(k, self.spring_fixed[e], e, true) else {
                         continue;
                     };
                     let block = block_of(k, l, sub(xa, self.pos_fixed[e]));
                     add_block(v, stride, diag, &block, 1.0);
+                }
+                if !with_hinges {
+                    continue;
+                }
+                for e in hinges.off[a]..hinges.off[a + 1] {
+                    let (h, me) = hinges.incidence[e];
+                    let h = h as usize;
+                    let Some(kw) = coef.value(hinges.kw[h], hinges.class[h]) else {
+                        continue;
+                    };
+                    let blocks = hinge_blocks(&hinges.positions(h, x), kw, hinges.rest[h], project);
+                    for (b, &rank) in pattern.hinge_slots[e].iter().enumerate() {
+                        if rank != u32::MAX {
+                            // Rows of node b, the columns of this node.
+                            add_block(v, stride, 3 * rank as usize, &blocks[b][me as usize], 1.0);
+                        }
+                    }
                 }
             }
         });
@@ -172,15 +238,16 @@ impl Topology {
 }
 
 impl Coefficient {
-    /// The constant multiplying spring `spring` (of stiffness `k`, kind `kinds[spring]`), or
-    /// `None` when the spring does not enter.
+    /// The constant multiplying an element of stiffness `k w` and `(class, weight)`, or `None`
+    /// when the element does not enter.
     #[inline]
-    fn value(&self, k: f64, spring: u32, kinds: &[SpringKind]) -> Option<f64> {
+    fn value(&self, kw: f64, (class, weight): (Class, f64)) -> Option<f64> {
         match self {
             Coefficient::Stiffness | Coefficient::ProjectedStiffness | Coefficient::Bound => {
-                Some(k)
+                Some(kw)
             }
-            Coefficient::Unit(kind) => (kinds[spring as usize] == *kind).then_some(1.0),
+            Coefficient::Unit(c) => (*c == class).then_some(weight),
+            Coefficient::AxialDamping => None,
         }
     }
 }

@@ -1,4 +1,4 @@
-//! Node-to-spring incidence (CSR) and the parallel, allocation-free force kernel.
+//! Node-to-spring and node-to-hinge incidences (CSR) and the parallel force kernels.
 //!
 //! The moving ("active") nodes are renumbered `0 … n_active − 1` in increasing original order.
 //! For each active node the incidence lists the springs at it in two parts:
@@ -10,11 +10,18 @@
 //! evaluated once from each end; since `d` only changes sign, the two forces are exact
 //! negatives, so the total force is zero up to the rounding of the per-node sums. Springs
 //! between two fixed nodes never move: their energy is a constant, computed once.
+//!
+//! Hinges (docs/math.md §5.2) couple four nodes: each is evaluated once into a per-hinge
+//! buffer of its four node forces (in parallel over hinges), then every active node adds the
+//! entries of its hinges in incidence order (in parallel over nodes), so the result does not
+//! depend on the number of threads. A hinge node that is fixed is read from its stored
+//! position.
 
 use rayon::prelude::*;
 
+use crate::hinge::{angle, angle_difference, angle_gradient};
 use crate::spring::{energy, internal_coefficient, sub};
-use crate::{SpringKind, SpringLattice};
+use crate::{Class, SpringLattice};
 
 /// Nodes per rayon task.
 const CHUNK_NODES: usize = 2048;
@@ -44,10 +51,118 @@ pub(crate) struct Topology {
     pub kl_fixed: Vec<[f64; 2]>,
     /// Spring index.
     pub spring_fixed: Vec<u32>,
-    /// Energy of the springs between two fixed nodes (constant).
+    /// Energy of the springs and hinges whose nodes are all fixed (constant).
     pub fixed_energy: f64,
-    /// Kind of every spring of the lattice.
-    pub kinds: Vec<SpringKind>,
+    /// Class and weight of every spring of the lattice.
+    pub spring_class: Vec<(Class, f64)>,
+    /// Axial damping `c` per active–active incidence (empty when no spring is damped).
+    pub damping: Vec<f64>,
+    /// Axial damping `c` per active–fixed incidence (empty when no spring is damped).
+    pub damping_fixed: Vec<f64>,
+    /// The hinges touching an active node.
+    pub hinges: HingeTopology,
+}
+
+/// The hinges of a [`Topology`] that touch at least one active node.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct HingeTopology {
+    /// The four nodes of each hinge: an active index, or `FIXED | slot` for a fixed node
+    /// whose position is `fixed_x[slot]`.
+    pub nodes: Vec<[u32; 4]>,
+    /// Positions of the fixed hinge nodes.
+    pub fixed_x: Vec<[f64; 3]>,
+    /// `k w` of each hinge.
+    pub kw: Vec<f64>,
+    /// Rest angle of each hinge.
+    pub rest: Vec<f64>,
+    /// Class and weight of each hinge.
+    pub class: Vec<(Class, f64)>,
+    /// CSR by active node of its `(hinge, slot)` incidences (offsets: `n_active + 1`).
+    pub off: Vec<usize>,
+    pub incidence: Vec<(u32, u8)>,
+}
+
+/// Marks a fixed node in [`HingeTopology::nodes`].
+pub(crate) const FIXED: u32 = 1 << 31;
+
+/// Hinges per rayon task in the hinge kernels.
+const CHUNK_HINGES: usize = 4096;
+/// Below this many hinges the hinge kernels run serially.
+const SERIAL_HINGES: usize = 8192;
+
+impl HingeTopology {
+    /// Number of hinges.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The positions of hinge `h`'s nodes, the active ones from `x`.
+    #[inline(always)]
+    pub fn positions(&self, h: usize, x: &[[f64; 3]]) -> [[f64; 3]; 4] {
+        self.nodes[h].map(|i| {
+            if i & FIXED != 0 {
+                self.fixed_x[(i & !FIXED) as usize]
+            } else {
+                x[i as usize]
+            }
+        })
+    }
+
+    /// The internal forces `k w (θ − θ0) ∂θ/∂x_i` of every hinge into `buffer` (four per
+    /// hinge).
+    fn hinge_forces(&self, x: &[[f64; 3]], buffer: &mut [[[f64; 3]; 4]]) {
+        let eval = |first: usize, out: &mut [[[f64; 3]; 4]]| {
+            for (i, f) in out.iter_mut().enumerate() {
+                let h = first + i;
+                let g = angle_gradient(&self.positions(h, x));
+                let s = self.kw[h] * angle_difference(g.theta, self.rest[h]);
+                *f = g.grad.map(|gi| [s * gi[0], s * gi[1], s * gi[2]]);
+            }
+        };
+        if self.len() < SERIAL_HINGES {
+            eval(0, buffer);
+        } else {
+            buffer
+                .par_chunks_mut(CHUNK_HINGES)
+                .enumerate()
+                .for_each(|(c, out)| eval(c * CHUNK_HINGES, out));
+        }
+    }
+
+    /// Adds the hinge forces of `buffer` to the active nodes `first .. first + out.len()`.
+    fn gather(&self, first: usize, buffer: &[[[f64; 3]; 4]], out: &mut [[f64; 3]]) {
+        for (i, f) in out.iter_mut().enumerate() {
+            let a = first + i;
+            for &(h, slot) in &self.incidence[self.off[a]..self.off[a + 1]] {
+                let g = buffer[h as usize][slot as usize];
+                f[0] += g[0];
+                f[1] += g[1];
+                f[2] += g[2];
+            }
+        }
+    }
+
+    /// `Σ ½ k w (θ − θ0)²` over the hinges.
+    fn energy(&self, x: &[[f64; 3]]) -> f64 {
+        let range = |lo: usize, hi: usize| -> f64 {
+            (lo..hi)
+                .map(|h| {
+                    let d = angle_difference(angle(&self.positions(h, x)), self.rest[h]);
+                    0.5 * self.kw[h] * d * d
+                })
+                .sum()
+        };
+        let n = self.len();
+        if n < SERIAL_HINGES {
+            range(0, n)
+        } else {
+            let parts: Vec<f64> = (0..n.div_ceil(CHUNK_HINGES))
+                .into_par_iter()
+                .map(|c| range(c * CHUNK_HINGES, ((c + 1) * CHUNK_HINGES).min(n)))
+                .collect();
+            parts.iter().sum()
+        }
+    }
 }
 
 impl Topology {
@@ -83,7 +198,7 @@ impl Topology {
                 (false, true) => deg_fixed[ib as usize] += 1,
                 (false, false) => {
                     fixed_energy += energy(
-                        s.k,
+                        s.stiffness(),
                         s.rest_length,
                         sub(lattice.positions[s.a], lattice.positions[s.b]),
                     );
@@ -99,11 +214,14 @@ impl Topology {
         let mut pos_fixed = vec![[0.0; 3]; m_fixed];
         let mut kl_fixed = vec![[0.0; 2]; m_fixed];
         let mut spring_fixed = vec![0u32; m_fixed];
+        let damped = lattice.springs.iter().any(|s| s.damping != 0.0);
+        let mut damping = vec![0.0; if damped { m } else { 0 }];
+        let mut damping_fixed = vec![0.0; if damped { m_fixed } else { 0 }];
         let mut next = off.clone();
         let mut next_fixed = off_fixed.clone();
         for (si, s) in lattice.springs.iter().enumerate() {
             let (ia, ib) = (active_index[s.a], active_index[s.b]);
-            let params = [s.k, s.rest_length];
+            let params = [s.stiffness(), s.rest_length];
             for (me, you, you_node) in [(ia, ib, s.b), (ib, ia, s.a)] {
                 if me == u32::MAX {
                     continue;
@@ -115,15 +233,23 @@ impl Topology {
                     other[e] = you;
                     kl[e] = params;
                     spring[e] = si as u32;
+                    if damped {
+                        damping[e] = s.damping;
+                    }
                 } else {
                     let e = next_fixed[me];
                     next_fixed[me] += 1;
                     pos_fixed[e] = lattice.positions[you_node];
                     kl_fixed[e] = params;
                     spring_fixed[e] = si as u32;
+                    if damped {
+                        damping_fixed[e] = s.damping;
+                    }
                 }
             }
         }
+        let (hinges, hinge_fixed_energy) = hinge_topology(lattice, &active_index);
+        fixed_energy += hinge_fixed_energy;
         Self {
             active_nodes,
             off,
@@ -135,7 +261,14 @@ impl Topology {
             kl_fixed,
             spring_fixed,
             fixed_energy,
-            kinds: lattice.springs.iter().map(|s| s.kind).collect(),
+            spring_class: lattice
+                .springs
+                .iter()
+                .map(|s| (Class::Spring(s.kind), s.weight))
+                .collect(),
+            damping,
+            damping_fixed,
+            hinges,
         }
     }
 
@@ -148,19 +281,71 @@ impl Topology {
         self.other.len() + self.pos_fixed.len()
     }
 
+    /// True when some spring has axial damping.
+    pub fn is_damped(&self) -> bool {
+        !self.damping.is_empty()
+    }
+
     /// Internal force `f_int = −f_elastic` (paper eq. (5) with the sign of a stiffness) on every
-    /// active node: `out[a] = Σ_b k (1 − l/|d|) d`, `d = x_a − x_b`, with `x` the active
-    /// positions. Allocation-free; parallel over chunks of nodes for large lattices.
+    /// active node: `out[a] = Σ_b k w (1 − l/|d|) d`, `d = x_a − x_b`, with `x` the active
+    /// positions, plus `Σ_hinges k w (θ − θ0) ∂θ/∂x_a` (docs/math.md §5.2). Without hinges
+    /// allocation-free; parallel over chunks of nodes (and hinges) for large lattices.
     pub fn internal_forces(&self, x: &[[f64; 3]], out: &mut [[f64; 3]]) {
         let n = self.n_active();
         assert_eq!(x.len(), n, "positions of {n} active nodes expected");
         assert_eq!(out.len(), n, "forces of {n} active nodes expected");
-        if self.n_incidences() < SERIAL_INCIDENCES {
-            self.forces_range(0, x, out);
+        let buffer = (self.hinges.len() > 0).then(|| {
+            let mut b = vec![[[0.0; 3]; 4]; self.hinges.len()];
+            self.hinges.hinge_forces(x, &mut b);
+            b
+        });
+        let range = |first: usize, chunk: &mut [[f64; 3]]| {
+            self.forces_range(first, x, chunk);
+            if let Some(b) = &buffer {
+                self.hinges.gather(first, b, chunk);
+            }
+        };
+        if self.n_incidences() + 4 * self.hinges.len() < SERIAL_INCIDENCES {
+            range(0, out);
         } else {
             out.par_chunks_mut(CHUNK_NODES)
                 .enumerate()
-                .for_each(|(c, chunk)| self.forces_range(c * CHUNK_NODES, x, chunk));
+                .for_each(|(c, chunk)| range(c * CHUNK_NODES, chunk));
+        }
+    }
+
+    /// Adds the axial damping forces `C(x) v` (docs/math.md §5.1) on every active node to `out`:
+    /// `Σ_b c ((v_a − v_b)·n) n`, `n = d/|d|`, `d = x_a − x_b`, `v_b = 0` at a fixed node.
+    pub fn add_damping_forces(&self, x: &[[f64; 3]], v: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        if !self.is_damped() {
+            return;
+        }
+        let range = |first: usize, chunk: &mut [[f64; 3]]| {
+            for (i, f) in chunk.iter_mut().enumerate() {
+                let a = first + i;
+                let (xa, va) = (x[a], v[a]);
+                let mut add = |d: [f64; 3], dv: [f64; 3], c: f64| {
+                    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    let s = c * (d[0] * dv[0] + d[1] * dv[1] + d[2] * dv[2]) / r2;
+                    f[0] += s * d[0];
+                    f[1] += s * d[1];
+                    f[2] += s * d[2];
+                };
+                for e in self.off[a]..self.off[a + 1] {
+                    let b = self.other[e] as usize;
+                    add(sub(xa, x[b]), sub(va, v[b]), self.damping[e]);
+                }
+                for e in self.off_fixed[a]..self.off_fixed[a + 1] {
+                    add(sub(xa, self.pos_fixed[e]), va, self.damping_fixed[e]);
+                }
+            }
+        };
+        if self.n_incidences() < SERIAL_INCIDENCES {
+            range(0, out);
+        } else {
+            out.par_chunks_mut(CHUNK_NODES)
+                .enumerate()
+                .for_each(|(c, chunk)| range(c * CHUNK_NODES, chunk));
         }
     }
 
@@ -214,7 +399,8 @@ impl Topology {
         }
     }
 
-    /// Elastic energy `Σ k (|d| − l)² / 2` of every spring (docs/math.md §5) with the active nodes at `x`.
+    /// Elastic energy `Σ k w (|d| − l)² / 2` of every spring (docs/math.md §5) and
+    /// `Σ ½ k w (θ − θ0)²` of every hinge (§5.2) with the active nodes at `x`.
     pub fn energy(&self, x: &[[f64; 3]]) -> f64 {
         let n = self.n_active();
         assert_eq!(x.len(), n, "positions of {n} active nodes expected");
@@ -245,8 +431,51 @@ impl Topology {
                 .collect();
             parts.iter().sum()
         };
-        moving + self.fixed_energy
+        moving + self.hinges.energy(x) + self.fixed_energy
     }
+}
+
+/// The hinges of `lattice` with at least one active node (`active_index[a] = u32::MAX` for
+/// an inactive node) and the energy of the others.
+fn hinge_topology(lattice: &SpringLattice, active_index: &[u32]) -> (HingeTopology, f64) {
+    let mut t = HingeTopology::default();
+    let mut fixed_energy = 0.0;
+    let n_active = active_index.iter().filter(|&&i| i != u32::MAX).count();
+    let mut deg = vec![0usize; n_active + 1];
+    for h in &lattice.hinges {
+        if h.nodes.iter().all(|&a| active_index[a] == u32::MAX) {
+            let x = h.nodes.map(|a| lattice.positions[a]);
+            let d = angle_difference(angle(&x), h.rest_angle);
+            fixed_energy += 0.5 * h.stiffness() * d * d;
+            continue;
+        }
+        let nodes = h.nodes.map(|a| match active_index[a] {
+            u32::MAX => {
+                t.fixed_x.push(lattice.positions[a]);
+                FIXED | (t.fixed_x.len() - 1) as u32
+            }
+            i => {
+                deg[i as usize] += 1;
+                i
+            }
+        });
+        t.nodes.push(nodes);
+        t.kw.push(h.stiffness());
+        t.rest.push(h.rest_angle);
+        t.class.push((Class::Hinge(h.kind), h.weight));
+    }
+    t.off = exclusive_scan(&deg);
+    t.incidence = vec![(0, 0); t.off[n_active]];
+    let mut next = t.off.clone();
+    for (h, nodes) in t.nodes.iter().enumerate() {
+        for (slot, &i) in nodes.iter().enumerate() {
+            if i & FIXED == 0 {
+                t.incidence[next[i as usize]] = (h as u32, slot as u8);
+                next[i as usize] += 1;
+            }
+        }
+    }
+    (t, fixed_energy)
 }
 
 /// `f += k (1 − l/|d|) d`.

@@ -22,6 +22,8 @@ fn chain(n: usize, k: f64, m: f64, h: f64, l: f64) -> SpringLattice {
             kind: SpringKind::Structural,
             k,
             rest_length: l,
+            weight: 1.0,
+            damping: 0.0,
         })
         .collect();
     let mut fixed = vec![false; n + 2];

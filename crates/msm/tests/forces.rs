@@ -130,6 +130,8 @@ fn geometric_term_appears_only_under_tension() {
         kind: SpringKind::Structural,
         k: 2.0,
         rest_length: 1.0,
+        weight: 1.0,
+        damping: 0.0,
     };
     let lattice = SpringLattice::from_parts(
         vec![[0.0; 3], [1.0, 0.0, 0.0]],
@@ -322,6 +324,8 @@ fn one_spring_by_hand() {
         kind: SpringKind::Shear,
         k: 3.0,
         rest_length: 1.0,
+        weight: 1.0,
+        damping: 0.0,
     };
     let x = [-0.5, 1.0, 1.0, 0.5, 1.0, -1.0];
     let (d, r) = ([1.0, 0.0, -2.0], 5f64.sqrt());

@@ -260,6 +260,8 @@ fn validation_errors() {
         kind: SpringKind::Structural,
         k: 1.0,
         rest_length: 1.0,
+        weight: 1.0,
+        damping: 0.0,
     };
     assert!(two_nodes(ok).is_ok());
     assert!(matches!(
@@ -553,6 +555,8 @@ fn node_nearest_without_parameters_uses_the_bounding_box() {
             kind: SpringKind::Structural,
             k: 1.0,
             rest_length: 1.0,
+            weight: 1.0,
+            damping: 0.0,
         })
         .collect();
     let l = SpringLattice::from_parts(
@@ -747,6 +751,8 @@ fn gravity_forces_are_mass_times_gravity_plus_node_forces() {
         kind: SpringKind::Structural,
         k: 1.0,
         rest_length: 1.0,
+        weight: 1.0,
+        damping: 0.0,
     };
     let mut lat = SpringLattice::from_parts(
         vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 2.0, 0.0]],
@@ -790,6 +796,8 @@ fn spring_lengths_are_the_distances_at_the_positions_given() {
         kind: SpringKind::Shear,
         k: 1.0,
         rest_length: 0.5,
+        weight: 1.0,
+        damping: 0.0,
     };
     let lat = SpringLattice::from_parts(
         vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],

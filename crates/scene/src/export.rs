@@ -29,7 +29,7 @@ pub fn lattice_grid(lattice: &SpringLattice, x: &[f64]) -> VtkUnstructured {
     let lengths = lattice.spring_lengths(x);
     grid.cell_data.push(DataArray::scalars(
         "stiffness",
-        lattice.springs.iter().map(|s| s.k).collect(),
+        lattice.springs.iter().map(|s| s.stiffness()).collect(),
     ));
     grid.cell_data.push(DataArray::scalars(
         "rest_length",

@@ -29,7 +29,7 @@ mod run;
 pub use dofmap::{DofMap, DofSlot};
 pub use error::{ErrorKind, SimError};
 pub use integrators::{NewtonSettings, Stepper, make_stepper, make_stepper_with_options};
-pub use model::{DynamicModel, FusedStep, LinearModel, SystemMatrix};
+pub use model::{ConfigurationDamping, DynamicModel, FusedStep, LinearModel, SystemMatrix};
 pub use nurbspring_linalg::{LinalgError, SparseMatrix};
 pub use run::{
     IMPLICIT_FALLBACK, IntegratorKind, MAX_MAGNITUDE, MAX_STEPS, MAX_SUBSTEPS, NullObserver,

@@ -142,6 +142,29 @@ pub trait DynamicModel: Sync {
     fn fused_step(&self) -> Option<&dyn FusedStep> {
         None
     }
+    /// Damping that depends on the configuration, beside the constant `D`
+    /// ([`ConfigurationDamping`]): the equation of motion is then
+    /// `M q̈ + (D + C(q)) q̇ + f_int(q) = f_ext(t)`. `None` (the default): no such damping.
+    fn configuration_damping(&self) -> Option<&dyn ConfigurationDamping> {
+        None
+    }
+}
+
+/// A damping force `C(q) q̇` whose matrix depends on the configuration (a dashpot along a
+/// spring's current direction, `C = c n nᵀ` on its two nodes), offered by
+/// [`DynamicModel::configuration_damping`]. `C(q)` is symmetric positive semi-definite.
+///
+/// How the integrators take it: the explicit schemes evaluate it with the forces, at the
+/// state where they evaluate `D q̇` (velocity Verlet at the half-step velocity, as it does a
+/// non-diagonal `D`); the implicit schemes put `C(q) v` of the trial state in the residual,
+/// which is what converges, and `c_v C(q)` in the Newton matrix (the variation of `C` with
+/// `q` left out: a modified Newton method that the residual test keeps exact); their line
+/// search's step energy holds `C` at the predicted positions.
+pub trait ConfigurationDamping: Sync {
+    /// `out += C(q) v`.
+    fn add_damping_force(&self, q: &[f64], v: &[f64], out: &mut [f64]);
+    /// `C(q)`, always with the same sparsity pattern.
+    fn damping_matrix(&self, q: &[f64]) -> SparseMatrix;
 }
 
 /// A symplectic-Euler step fused into one pass over a model's data (spring forces, velocity

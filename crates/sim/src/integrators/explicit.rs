@@ -136,7 +136,7 @@ fn model_mass_inverse(
     Ok(inverse)
 }
 
-/// `out = M⁻¹ (f_ext(t) − f_int(q) − D v)` using the buffer `fint`.
+/// `out = M⁻¹ (f_ext(t) − f_int(q) − D v − C(q) v)` using the buffer `fint`.
 fn acceleration(
     model: &dyn DynamicModel,
     inv_m: &MassInverse,
@@ -148,6 +148,9 @@ fn acceleration(
 ) {
     model.external_force(t, out);
     model.internal_force(q, fint);
+    if let Some(c) = model.configuration_damping() {
+        c.add_damping_force(q, v, fint);
+    }
     for (o, f) in out.iter_mut().zip(fint.iter()) {
         *o -= f;
     }
@@ -246,9 +249,12 @@ impl super::Stepper for SymplecticEuler {
             return Ok(());
         };
         // Forces first (the model parallelizes them), then one fused pass:
-        // v += Δt M⁻¹ (f_ext − f_int − D v), q += Δt v.
+        // v += Δt M⁻¹ (f_ext − f_int − C(q) v − D v), q += Δt v.
         model.external_force(state.t, &mut self.a);
         model.internal_force(&state.q, &mut self.fint);
+        if let Some(c) = model.configuration_damping() {
+            c.add_damping_force(&state.q, &state.v, &mut self.fint);
+        }
         let (fext, fint) = (&self.a, &self.fint);
         let update = |offset: usize, v: &mut [f64], q: &mut [f64]| {
             for k in 0..v.len() {
@@ -278,7 +284,8 @@ impl super::Stepper for SymplecticEuler {
 /// `M (q⁺ − 2q + q⁻)/Δt² + f_int(q) = f_ext(t)` written with velocities):
 /// `v½ = v + ½Δt a`, `q⁺ = q + Δt v½`, `a⁺ = M⁻¹(f_ext(t⁺) − f_int(q⁺) − D v⁺)`,
 /// `v⁺ = v½ + ½Δt a⁺`. Second order, symplectic without damping, stable for
-/// `Δt < 2/ω_max`.
+/// `Δt < 2/ω_max`. A configuration damping `C(q⁺)` ([`crate::ConfigurationDamping`]) is
+/// evaluated at `v½` (first order in that term).
 ///
 /// With a diagonal mass, a diagonal D is treated implicitly in that last half step,
 /// `(M + ½ΔtD) v⁺ = M v½ + ½Δt (f_ext − f_int)`, which is explicit for diagonal matrices; a
@@ -399,6 +406,10 @@ impl super::Stepper for VelocityVerlet {
         let t_new = state.t + dt;
         model.external_force(t_new, &mut self.f);
         model.internal_force(&state.q, &mut self.fint);
+        // Configuration damping at v½, like a non-diagonal D (first order in that term).
+        if let Some(c) = model.configuration_damping() {
+            c.add_damping_force(&state.q, &state.v, &mut self.fint);
+        }
         for i in 0..n {
             self.f[i] -= self.fint[i];
         }

@@ -22,6 +22,10 @@
 //! takes the place of `K_T`, so the step is a descent direction of the step's energy; a model
 //! without one is factored by sparse LU ([`LuSolver`]).
 //!
+//! A configuration damping `C(q) q̇` ([`crate::ConfigurationDamping`]) enters the residual at
+//! the trial state, `R = M a + (D + C(q)) v + f_int(q) − f_ext`, and the Newton matrix as
+//! `c_v C(q)` (its variation with `q` left out, which only slows a modified Newton step).
+//!
 //! **Line search.** The step's equation is the stationarity condition of the step energy
 //! `Ψ(a) = E(q̂ + c_q a)/c_q + ½aᵀ(M + c_v D)a + (D v̂ − f_ext)ᵀa` (`∇Ψ = R`, the residual;
 //! `E` is [`DynamicModel::potential_energy`]). A direction from a positive definite factor is a
@@ -118,6 +122,22 @@ const MAX_HALVINGS: usize = 20;
 /// slope `Rᵀp < 0` there.
 struct LastStep {
     slope: f64,
+}
+
+/// `K + (c_v/c_q) C(q)`: the tangent `k` with a configuration damping folded in, so that
+/// `M + c_v D + c_q (K + (c_v/c_q) C)` is the Newton matrix (module docs); `k` itself when the
+/// model has none.
+fn with_damping(
+    model: &dyn DynamicModel,
+    q: &[f64],
+    k: SparseMatrix,
+    cq: f64,
+    cv: f64,
+) -> Result<SparseMatrix, SimError> {
+    Ok(match model.configuration_damping() {
+        Some(c) => SparseMatrix::linear_combination(1.0, &k, cv / cq, &c.damping_matrix(q))?,
+        None => k,
+    })
 }
 
 /// `M + c_v D`, the constant part of the Newton matrix.
@@ -380,7 +400,10 @@ impl ImplicitCore {
         let constant = constant_part(model, &mass, cv)?;
         let mut solver = NewtonSolver::new();
         let mut counts = NewtonCounts::default();
-        let linear = match model.linear_stiffness() {
+        let linear = match model
+            .linear_stiffness()
+            .filter(|_| model.configuration_damping().is_none())
+        {
             Some(k) => {
                 solver.factor(&SparseMatrix::linear_combination(1.0, &constant, cq, k)?)?;
                 counts.factorizations += 1;
@@ -415,7 +438,13 @@ impl ImplicitCore {
     /// place of `K_T` where it has one, so the step is a descent direction of the step's
     /// energy; otherwise J is factored by LU.
     fn refresh_factor(&mut self, model: &dyn DynamicModel) -> Result<(), SimError> {
-        let kt = model.tangent_stiffness(&self.q_trial);
+        let kt = with_damping(
+            model,
+            &self.q_trial,
+            model.tangent_stiffness(&self.q_trial),
+            self.cq,
+            self.cv,
+        )?;
         let j = match &mut self.jacobian {
             Some(plan) => plan.update(self.cq, &kt)?,
             None => self
@@ -426,7 +455,10 @@ impl ImplicitCore {
         if !self.solver.factor_spd(j)? {
             let plan = self.jacobian.as_mut().expect("set above");
             match model.projected_tangent_stiffness(&self.q_trial) {
-                Some(kp) => self.solver.factor(plan.update(self.cq, &kp)?)?,
+                Some(kp) => {
+                    let kp = with_damping(model, &self.q_trial, kp, self.cq, self.cv)?;
+                    self.solver.factor(plan.update(self.cq, &kp)?)?
+                }
                 None => self.solver.factor(plan.matrix())?,
             }
         }
@@ -576,6 +608,14 @@ impl ImplicitCore {
                 self.residual[i] += self.work[i];
             }
         }
+        if let Some(c) = model.configuration_damping() {
+            self.work.fill(0.0);
+            c.add_damping_force(&self.q_trial, &self.v_trial, &mut self.work);
+            scale = scale.max(norm(&self.work));
+            for i in 0..a.len() {
+                self.residual[i] += self.work[i];
+            }
+        }
         for i in 0..a.len() {
             self.residual[i] += self.fint[i] - self.fext[i];
         }
@@ -603,6 +643,15 @@ impl ImplicitCore {
                 self.work[i] = 0.5 * self.cv * a[i] + v_hat[i];
             }
             d.mul_vec(&self.work, &mut self.fint);
+            psi += dot(a, &self.fint);
+        }
+        if let Some(c) = model.configuration_damping() {
+            // The same with C held at the predicted positions q̂ (module docs).
+            for i in 0..a.len() {
+                self.work[i] = 0.5 * self.cv * a[i] + v_hat[i];
+            }
+            self.fint.fill(0.0);
+            c.add_damping_force(q_hat, &self.work, &mut self.fint);
             psi += dot(a, &self.fint);
         }
         psi

@@ -80,9 +80,10 @@ impl Modal {
         let k = model
             .linear_stiffness()
             .ok_or_else(|| unsupported("the model is nonlinear (no constant stiffness)".into()))?;
-        if model
-            .damping()
-            .is_some_and(|d| d.to_sparse().values().iter().any(|&v| v != 0.0))
+        if model.configuration_damping().is_some()
+            || model
+                .damping()
+                .is_some_and(|d| d.to_sparse().values().iter().any(|&v| v != 0.0))
         {
             return Err(unsupported(
                 "the model is damped; the modal solution is for undamped systems".into(),

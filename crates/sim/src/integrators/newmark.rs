@@ -28,7 +28,7 @@ pub struct Newmark {
     v_hat: Vec<f64>,
 }
 
-/// `M⁻¹ (f_ext(t) − f_int(q) − D v)`: the acceleration of the equation of motion.
+/// `M⁻¹ (f_ext(t) − f_int(q) − D v − C(q) v)`: the acceleration of the equation of motion.
 pub(crate) fn initial_acceleration(
     model: &dyn DynamicModel,
     state: &State,
@@ -38,6 +38,9 @@ pub(crate) fn initial_acceleration(
     let mut fint = vec![0.0; n];
     model.external_force(state.t, &mut f);
     model.internal_force(&state.q, &mut fint);
+    if let Some(c) = model.configuration_damping() {
+        c.add_damping_force(&state.q, &state.v, &mut fint);
+    }
     for i in 0..n {
         f[i] -= fint[i];
     }

@@ -33,6 +33,12 @@ impl TerzopoulosQin {
             integrator: "terzopoulos-qin",
             reason: "the scheme needs a constant stiffness (a linear model); use newmark or backward-euler".into(),
         })?;
+        if model.configuration_damping().is_some() {
+            return Err(SimError::NotSupported {
+                integrator: "terzopoulos-qin",
+                reason: "the model's damping depends on its configuration; use newmark or backward-euler".into(),
+            });
+        }
         let n = model.n_dofs();
         let m = model.mass().to_sparse();
         let mut a = SparseMatrix::linear_combination(2.0, &m, 2.0 * dt * dt, k)?;
