@@ -51,6 +51,8 @@ mod reference;
 mod runner;
 mod scalar;
 mod setup;
+mod springs;
+mod springs_check;
 #[cfg(test)]
 mod test_scenes;
 mod validation;
@@ -85,6 +87,15 @@ pub use runner::{Recording, Watched, record, record_noted};
 pub use scalar::{EnergyOrigin, ScalarSystem};
 pub use setup::{
     Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Method, Setup, TimeSettings,
+};
+pub use springs::{
+    CALIBRATION_ITERATIONS, ClassConstant, RIGID_FREQUENCY, RIGID_MODES, SPRING_CLASSES,
+    SPRING_MODES, SPRING_PULL, SpringFrequency, SpringsConfig, SpringsDerivation,
+    TABLE_SPRING_MODES, derive_springs, rule_lattice,
+};
+pub use springs_check::{
+    DynamicRun, LARGE_MOTION, LARGE_MOTION_PERIODS, LOAD_LEVELS, LargeMotion, LoadLevelError,
+    NodeMap, SMALL_MOTION_PERIODS, STEPS_PER_PERIOD, SmallMotion, lowest_modes, static_path,
 };
 pub use validation::{
     Comparison, REPEATED_FREQUENCY, Trajectory, compare, compare_points, dominant_period, mac,

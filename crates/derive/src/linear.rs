@@ -539,6 +539,7 @@ pub fn derive_linear(
                 reason: "the paper's derivation is not a linear one (derive_msm runs it)".into(),
             });
         }
+        Method::Springs => return Err(springs_elsewhere()),
     };
     if cancelled() {
         return Err(DeriveError::Cancelled);
@@ -669,4 +670,14 @@ pub fn derive_linear(
         warnings: warn,
     };
     Ok((derivation, setup))
+}
+
+/// The error of a tension-plate derivation asked for the spring derivation.
+pub(crate) fn springs_elsewhere() -> DeriveError {
+    DeriveError::InvalidOption {
+        name: "fit.derivation",
+        value: "\"springs\"".into(),
+        reason: "the spring derivation takes a Kirchhoff–Love shell (derive_springs runs it)"
+            .into(),
+    }
 }

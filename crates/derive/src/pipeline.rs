@@ -492,6 +492,9 @@ pub fn derive_msm(
     cancel: Option<Arc<AtomicBool>>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Derivation, Setup), DeriveError> {
+    if config.method == crate::Method::Springs {
+        return Err(crate::linear::springs_elsewhere());
+    }
     let setup = Setup::new(config)?;
     let fit = fit_step(&setup, &config.fit)?;
     let scan_reference = reference_run(&setup, config, cancel.clone())?;

@@ -123,24 +123,29 @@ pub enum Method {
     Excitation,
     /// The exact linear reduction of the D-NURBS onto the nodes (not an MSM: a reference).
     Reduction,
+    /// Rest-length springs and dihedral hinges from a Kirchhoff–Love shell, calibrated on its
+    /// lowest modes (docs/math.md §11; the default for shell scenes).
+    Springs,
 }
 
 impl Method {
     /// Every derivation.
-    pub const ALL: [Method; 4] = [
+    pub const ALL: [Method; 5] = [
         Method::Modal,
         Method::Paper,
         Method::Excitation,
         Method::Reduction,
+        Method::Springs,
     ];
 
-    /// `"modal"`, `"paper"`, `"excitation"` or `"reduction"`.
+    /// `"modal"`, `"paper"`, `"excitation"`, `"reduction"` or `"springs"`.
     pub fn name(self) -> &'static str {
         match self {
             Method::Modal => "modal",
             Method::Paper => "paper",
             Method::Excitation => "excitation",
             Method::Reduction => "reduction",
+            Method::Springs => "springs",
         }
     }
 
@@ -151,7 +156,13 @@ impl Method {
 
     /// True for the derivations whose model is linear (validated by exact modes).
     pub fn is_linear(self) -> bool {
-        self != Method::Paper
+        !matches!(self, Method::Paper | Method::Springs)
+    }
+
+    /// True for the derivation of a Kirchhoff–Love shell (the others derive from the
+    /// tension plate).
+    pub fn is_shell(self) -> bool {
+        self == Method::Springs
     }
 }
 

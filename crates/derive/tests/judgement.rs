@@ -184,7 +184,10 @@ fn check_fixed_node_masses(d: &Derivation, config: &Config) {
 }
 
 fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
-    assert_eq!(config.method.is_linear(), config.method != Method::Paper);
+    assert_eq!(
+        config.method.is_linear(),
+        !matches!(config.method, Method::Paper | Method::Springs)
+    );
     assert_eq!(
         nurbspring_derive::FitMethod::ClosedForm.label(),
         "closed form"

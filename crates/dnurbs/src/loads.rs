@@ -32,6 +32,39 @@ pub struct Loads {
 }
 
 impl Loads {
+    /// Every load times `s` (gravity, distributed density, point and edge forces, edge
+    /// moments): the load level `s` of a load path.
+    ///
+    /// ```
+    /// use nurbspring_dnurbs::Loads;
+    /// let l = Loads { gravity: [0.0, 0.0, -9.81], ..Loads::default() };
+    /// assert_eq!(l.scaled(2.0).gravity, [0.0, 0.0, -19.62]);
+    /// ```
+    pub fn scaled(&self, s: f64) -> Loads {
+        let times = |f: [f64; 3]| f.map(|x| s * x);
+        Loads {
+            gravity: times(self.gravity),
+            distributed: times(self.distributed),
+            point: self
+                .point
+                .iter()
+                .map(|p| PointLoad {
+                    force: times(p.force),
+                    ..p.clone()
+                })
+                .collect(),
+            edges: self
+                .edges
+                .iter()
+                .map(|e| EdgeLoad {
+                    force: times(e.force),
+                    moment: s * e.moment,
+                    ..e.clone()
+                })
+                .collect(),
+        }
+    }
+
     /// True when there is no load at all.
     pub fn is_zero(&self) -> bool {
         self.gravity == [0.0; 3]

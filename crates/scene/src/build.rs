@@ -2,7 +2,9 @@
 //! options of the MSM, the derivation's configuration. Model errors come back as
 //! [`Error::Model`] naming the file and, where one caused it, the key.
 
-use nurbspring_derive::{Config, FitOptions, InitialConditions, MassChoice, Method, TimeSettings};
+use nurbspring_derive::{
+    Config, FitOptions, InitialConditions, MassChoice, Method, SpringsConfig, TimeSettings,
+};
 use nurbspring_dnurbs::{
     Constraints, DnurbsModel, EdgeCondition, EdgeConstraint, EdgeLoad, Geometry, LinearConstraint,
     Loads, Material, PointLoad,
@@ -326,7 +328,41 @@ impl Scene {
     /// The derivation the scene asks for, and why when it is not the one named (see
     /// [`crate::spec::FitSpec::derivation_for`]).
     pub fn derivation(&self) -> (Method, Option<&'static str>) {
-        self.fit.derivation_for(&self.dnurbs, &self.constraints)
+        self.fit.derivation_for(
+            self.material.shell().is_some(),
+            &self.dnurbs,
+            &self.constraints,
+        )
+    }
+
+    /// The spring derivation's configuration (docs/math.md §11), or the error for a
+    /// tension-plate scene.
+    pub fn springs_config(&self) -> Result<SpringsConfig, Error> {
+        let Some(shell) = self.material.shell() else {
+            return Err(self.model_error(
+                Some("material.model"),
+                nurbspring_derive::DeriveError::InvalidOption {
+                    name: "material",
+                    value: "the tension plate".to_string(),
+                    reason: "the spring derivation derives from a Kirchhoff–Love shell: \
+                             material.model = \"kirchhoff-love\" with young, poisson, \
+                             thickness and density"
+                        .to_string(),
+                },
+            ));
+        };
+        let surface = self.to_surface()?;
+        Ok(SpringsConfig {
+            surface,
+            shell: shell.clone(),
+            loads: self.build_loads(),
+            constraints: self.build_constraints(),
+            dnurbs: self.dnurbs.clone(),
+            lattice: self.lattice_options(Method::Springs, &MsmOverrides::default())?,
+            initial: self.initial_conditions(),
+            time: self.time_settings(),
+            probes: self.probe_params()?,
+        })
     }
 
     /// The derivation's configuration for `method` (`None`: [`Scene::derivation`]); for the

@@ -47,6 +47,7 @@ pub mod run;
 mod scene;
 mod scene_error;
 pub mod spec;
+pub mod springs_report;
 pub mod summary;
 mod validate;
 

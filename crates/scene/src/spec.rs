@@ -586,17 +586,20 @@ pub struct FitSpec {
 }
 
 impl FitSpec {
-    /// The derivation a scene asks for: `fit.derivation`, else `modal`, or `paper` (with the
-    /// reason) for a scene the linear derivations cannot take: weights as unknowns, or
-    /// `[[constraints.linear]]` rows (the D-NURBS is then not three identical scalar systems,
-    /// docs/math.md §8.2).
+    /// The derivation a scene asks for: `fit.derivation`, else `springs` for a Kirchhoff–Love
+    /// `material` (`shell`), else `modal`, or `paper` (with the reason) for a scene the linear
+    /// derivations cannot take: weights as unknowns, or `[[constraints.linear]]` rows (the
+    /// D-NURBS is then not three identical scalar systems, docs/math.md §8.2).
     pub fn derivation_for(
         &self,
+        shell: bool,
         dnurbs: &DnurbsOptions,
         constraints: &ConstraintsSpec,
     ) -> (Method, Option<&'static str>) {
         if let Some(m) = self.derivation {
             (m, None)
+        } else if shell {
+            (Method::Springs, None)
         } else if dnurbs.weights_as_dofs {
             (
                 Method::Paper,

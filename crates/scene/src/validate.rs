@@ -205,7 +205,19 @@ pub(crate) fn build_scene(
     }
     let initial = initial_spec(raw.initial, &dnurbs, info.as_ref(), &mut p);
     check_simulation(&simulation, &material, &dnurbs, info.as_ref(), &mut p);
-    let method = raw.fit.derivation_for(&dnurbs, &raw.constraints).0;
+    let shell = material.shell().is_some();
+    let method = raw.fit.derivation_for(shell, &dnurbs, &raw.constraints).0;
+    if shell != method.is_shell() {
+        p.push(
+            "fit.derivation",
+            format!("\"{}\"", method.name()),
+            if shell {
+                "a Kirchhoff–Love scene derives rest-length springs and hinges: fit.derivation = \"springs\" (or leave it out)"
+            } else {
+                "the spring derivation needs a shell: material.model = \"kirchhoff-love\" (the tension plate derives modal, excitation, reduction or paper)"
+            },
+        );
+    }
     check_msm(
         &raw.msm,
         &material,

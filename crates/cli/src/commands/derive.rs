@@ -46,6 +46,9 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
         None => scene.derivation(),
     };
     ctx.check_resources(&scene, Job::Derive(method), Some(&args.out))?;
+    if method == Method::Springs {
+        return run_springs(ctx, &args, &scene);
+    }
     let config = scene.derivation_config(Some(method))?;
     let staged = stage_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
@@ -109,6 +112,28 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     }
     for w in &derivation.warnings {
         eprintln!("warning: {w}");
+    }
+    Ok(())
+}
+
+/// The spring derivation of a Kirchhoff–Love scene (docs/math.md §11).
+fn run_springs(ctx: &Context, args: &DeriveArgs, scene: &Scene) -> CmdResult {
+    let staged = stage_out_dir(&args.out)?;
+    let d = nurbspring_scene::springs_report::derive_springs(scene, Some(ctx.cancel.clone()))?;
+    let label = args.scene.display().to_string();
+    nurbspring_scene::springs_report::write_springs(staged.path(), &label, scene, &d)?;
+    let out = commit_out_dir(staged)?;
+    if args.json {
+        print_report(&out)?;
+    } else {
+        println!(
+            "derived spring model (springs): {} nodes, {} springs, {} hinges; {}",
+            d.lattice.n_nodes(),
+            d.lattice.springs.len(),
+            d.lattice.hinges.len(),
+            d.verdict
+        );
+        println!("Outputs in {}", out.display());
     }
     Ok(())
 }

@@ -1,0 +1,222 @@
+//! The spring derivation of a Kirchhoff–Love shell (docs/math.md §11): the energy-equivalence
+//! rules against the plane-stress sheet and the plate, and the derived model's invariants
+//! (stress-free at rest, rigid motion, lowest frequency, mass) and its large-motion accuracy
+//! on Sze's cantilever.
+
+use nurbspring_derive::{
+    InitialConditions, SpringsConfig, TimeSettings, derive_springs, rule_lattice,
+};
+use nurbspring_dnurbs::obstacle::{cylinder_sector, rectangle, refined};
+use nurbspring_dnurbs::{
+    Constraints, DnurbsOptions, Edge, EdgeCondition, EdgeConstraint, EdgeLoad, Loads, PointLoad,
+    ShellMaterial,
+};
+use nurbspring_msm::{FixedNodes, LatticeOptions, ParameterGrid, SpringLattice};
+use nurbspring_sim::IntegratorKind;
+
+fn material(poisson: f64) -> ShellMaterial {
+    ShellMaterial {
+        young: 7.0e7,
+        poisson,
+        thickness: 0.01,
+        density: 1200.0,
+        gamma: 0.0,
+    }
+}
+
+/// A unit square sampled on an 9 × 9 uniform grid (8 × 8 cells, half with each diagonal).
+fn square_lattice(shell: &ShellMaterial) -> SpringLattice {
+    let options = LatticeOptions {
+        grid: ParameterGrid::Uniform {
+            nodes_u: 9,
+            nodes_v: 9,
+        },
+        fixed: FixedNodes::Auto,
+        ..LatticeOptions::default()
+    };
+    rule_lattice(&rectangle(1.0, 1.0), shell, &options, &[])
+        .unwrap()
+        .0
+}
+
+fn moved(lattice: &SpringLattice, f: impl Fn([f64; 3]) -> [f64; 3]) -> Vec<f64> {
+    lattice.positions.iter().flat_map(|&x| f(x)).collect()
+}
+
+#[test]
+fn membrane_springs_are_the_plane_stress_sheet_with_poisson_one_third() {
+    for nu in [0.0, 0.3, 0.45] {
+        let shell = material(nu);
+        let lattice = square_lattice(&shell);
+        let e_bar = shell.membrane_stiffness();
+        // The sheet the rule aims at: modulus Ē, ν = 1/3 (C₁₁₁₁ = Ē, C₁₁₂₂ = C₁₂₁₂ = Ē/3).
+        let strains = [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.7, -0.4, 0.3],
+        ];
+        for [e11, e22, e12] in strains {
+            let s = 1e-6;
+            let (e11, e22, e12) = (s * e11, s * e22, s * e12);
+            let x = moved(&lattice, |p| {
+                [
+                    p[0] + e11 * p[0] + e12 * p[1],
+                    p[1] + e12 * p[0] + e22 * p[1],
+                    0.0,
+                ]
+            });
+            let energy = lattice.elastic_energy(&x);
+            let expected = 0.5
+                * e_bar
+                * (e11 * e11 + e22 * e22 + 2.0 / 3.0 * e11 * e22 + 4.0 / 3.0 * e12 * e12);
+            assert!(
+                ((energy - expected) / expected).abs() < 1e-5,
+                "ν = {nu}, strain ({e11}, {e22}, {e12}): lattice {energy:e}, sheet {expected:e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn hinges_bend_and_twist_like_the_plate_with_bending_poisson_zero() {
+    let shell = material(0.3);
+    let lattice = square_lattice(&shell);
+    let d = shell.bending_stiffness();
+    let k = 1e-4;
+    // Cylindrical bending along u: the hinges on the 7 interior grid lines u = const carry it
+    // (the 8 columns of cells meet there), so the energy is ½ D κ² over 7/8 of the square.
+    let x = moved(&lattice, |p| [p[0], p[1], 0.5 * k * p[0] * p[0]]);
+    let bend = lattice.elastic_energy(&x);
+    let expected = 0.5 * d * k * k * 7.0 / 8.0;
+    assert!(
+        ((bend - expected) / expected).abs() < 1e-3,
+        "bending: {bend:e} against {expected:e}"
+    );
+    // Pure twist z = τ x y: every cell's diagonal hinge is interior; D τ² over the square
+    // (the plate with ν = 0; the plate's own is D (1 − ν) τ², the Gaussian-curvature term).
+    let x = moved(&lattice, |p| [p[0], p[1], k * p[0] * p[1]]);
+    let twist = lattice.elastic_energy(&x);
+    let expected = d * k * k;
+    assert!(
+        ((twist - expected) / expected).abs() < 1e-3,
+        "twist: {twist:e} against {expected:e}"
+    );
+}
+
+fn clamped_plate_config(surface: nurbspring_geom::NurbsSurface) -> SpringsConfig {
+    SpringsConfig {
+        surface,
+        shell: material(0.3),
+        loads: Loads {
+            point: vec![PointLoad {
+                u: 1.0,
+                v: 1.0,
+                force: [0.0, 0.0, 2.0],
+            }],
+            ..Loads::default()
+        },
+        constraints: Constraints {
+            edges: vec![EdgeConstraint {
+                edge: Edge::U0,
+                condition: EdgeCondition::Clamped,
+            }],
+            ..Constraints::default()
+        },
+        dnurbs: DnurbsOptions::default(),
+        lattice: LatticeOptions {
+            grid: ParameterGrid::Greville,
+            fixed: FixedNodes::Auto,
+            ..LatticeOptions::default()
+        },
+        initial: InitialConditions::default(),
+        time: TimeSettings {
+            dt: 0.001,
+            t_end: 0.1,
+            dnurbs_integrator: IntegratorKind::Newmark,
+            msm_integrator: IntegratorKind::Newmark,
+        },
+        probes: vec![(0.5, 0.5)],
+    }
+}
+
+fn rotate(x: [f64; 3]) -> [f64; 3] {
+    // A rotation by 0.7 rad about (1, 2, 2)/3 and a translation.
+    let n = [1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0];
+    let (s, c) = 0.7_f64.sin_cos();
+    let dot = n[0] * x[0] + n[1] * x[1] + n[2] * x[2];
+    let cross = [
+        n[1] * x[2] - n[2] * x[1],
+        n[2] * x[0] - n[0] * x[2],
+        n[0] * x[1] - n[1] * x[0],
+    ];
+    std::array::from_fn(|k| x[k] * c + cross[k] * s + n[k] * dot * (1.0 - c) + [0.3, -1.2, 2.0][k])
+}
+
+#[test]
+fn a_derived_curved_model_is_stress_free_at_rest_and_under_rigid_motion() {
+    let surface = refined(&cylinder_sector(0.5, 0.6, 0.9, 2.2), 3, (4, 4)).unwrap();
+    let config = clamped_plate_config(surface);
+    let d = derive_springs(&config, None).unwrap();
+    let lattice = &d.lattice;
+    let scale: f64 = lattice
+        .springs
+        .iter()
+        .map(|s| s.stiffness() * s.rest_length)
+        .fold(0.0, f64::max);
+    let mut f = vec![0.0; 3 * lattice.n_nodes()];
+    lattice.elastic_forces(&lattice.flat_positions(), &mut f);
+    let rest = f.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    lattice.elastic_forces(&moved(lattice, rotate), &mut f);
+    let rigid = f.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    assert!(rest <= 1e-12 * scale, "at rest: {rest:e} (scale {scale:e})");
+    assert!(
+        rigid <= 1e-9 * scale,
+        "rotated: {rigid:e} (scale {scale:e})"
+    );
+    assert!(lattice.hinges.iter().any(|h| h.rest_angle.abs() > 1e-3));
+    // The lowest elastic frequency is the shell's; the masses are ρ t × the surface area
+    // (the arc r Δθ times the length).
+    let first = &d.frequencies[0];
+    assert!(first.relative_error.unwrap().abs() < 1e-9, "{first:?}");
+    let area = 0.5 * (2.2 - 0.9) * 0.6;
+    let mass = config.shell.mass_per_area() * area;
+    assert!(
+        ((d.total_mass - mass) / mass).abs() < 1e-9,
+        "{} against {mass}",
+        d.total_mass
+    );
+}
+
+#[test]
+fn sze_cantilever_nodes_follow_the_shell_at_every_load_level() {
+    // Sze, Liu and Lo (2004) §3.1: the strip under end shear up to P_max = 4 (the tip moves
+    // 67 % of the length); the target is 3 % of the size at every level, measured
+    // 0.73 %.
+    let mut config = clamped_plate_config(refined(&rectangle(10.0, 1.0), 3, (16, 1)).unwrap());
+    config.shell = ShellMaterial {
+        young: 1.2e6,
+        poisson: 0.0,
+        thickness: 0.1,
+        density: 500.0,
+        gamma: 0.0,
+    };
+    config.loads = Loads {
+        edges: vec![EdgeLoad {
+            edge: Edge::U1,
+            force: [0.0, 0.0, 4.0],
+            moment: 0.0,
+        }],
+        ..Loads::default()
+    };
+    config.probes = vec![(1.0, 0.5)];
+    let d = derive_springs(&config, None).unwrap();
+    let large = d.large_motion.as_ref().unwrap();
+    assert!((large.load_factor - 1.0).abs() < 1e-12);
+    assert_eq!(large.levels.len(), 4);
+    for level in &large.levels {
+        assert!(level.max_error < 0.01, "{level:?}");
+    }
+    assert!(large.largest_displacement.unwrap() > 0.7);
+    assert!(d.small_motion.relative_rms < 0.03, "{:?}", d.small_motion);
+}

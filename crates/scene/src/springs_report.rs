@@ -1,0 +1,266 @@
+//! The files of a spring derivation (docs/math.md §11): `msm.json` (springs, hinges, masses,
+//! damping), `report.json`, `report.md` with the verdict on top, `load_path.csv` and
+//! `load_path.svg` of the large-motion load path, and the lattice as OBJ and VTK.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use nurbspring_derive::{DeriveError, LARGE_MOTION, SpringsDerivation};
+use nurbspring_io::output::{write_csv, write_json};
+use nurbspring_io::plot::{PlotOptions, Series, plot_series_with};
+use nurbspring_msm::FileSimulation;
+use nurbspring_sim::IntegratorKind;
+use serde::Serialize;
+
+use crate::export::{write_lattice_obj, write_lattice_vtu};
+use crate::msm_file::msm_file;
+use crate::{Error, Scene};
+
+/// Derives the spring model of a Kirchhoff–Love scene; errors name the scene key they come
+/// from.
+pub fn derive_springs(
+    scene: &Scene,
+    cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+) -> Result<SpringsDerivation, Error> {
+    let config = scene.springs_config()?;
+    nurbspring_derive::derive_springs(&config, cancel).map_err(|e| {
+        let key = match &e {
+            DeriveError::InvalidOption { name, .. } => match *name {
+                "constraints" => Some("constraints"),
+                "moment" => Some("loads.edge"),
+                "msm.grid" => Some("msm.grid"),
+                _ => None,
+            },
+            _ => None,
+        };
+        Error::model(&scene.path, key, e)
+    })
+}
+
+/// report.json of a spring derivation.
+#[derive(Serialize)]
+struct SpringsReport<'a> {
+    scene: &'a str,
+    derivation: &'static str,
+    nodes: usize,
+    springs: usize,
+    hinges: usize,
+    fixed_nodes: usize,
+    #[serde(flatten)]
+    derivation_detail: &'a SpringsDerivation,
+}
+
+/// Writes every file of a spring derivation into `out` (each atomically).
+pub fn write_springs(
+    out: &Path,
+    scene_label: &str,
+    scene: &Scene,
+    d: &SpringsDerivation,
+) -> Result<(), Error> {
+    let time = scene.time_settings();
+    let run = FileSimulation {
+        dt: time.dt,
+        t_end: time.t_end,
+        integrator: IntegratorKind::Newmark,
+    };
+    let msm = msm_file(
+        &d.lattice,
+        scene_label,
+        &d.node_velocities,
+        run,
+        &d.probe_nodes,
+    );
+    write_json(out.join("msm.json"), &msm)?;
+    write_lattice_obj(&out.join("lattice.obj"), &d.lattice)?;
+    write_lattice_vtu(&out.join("lattice.vtu"), &d.lattice)?;
+    let report = SpringsReport {
+        scene: scene_label,
+        derivation: "springs",
+        nodes: d.lattice.n_nodes(),
+        springs: d.lattice.springs.len(),
+        hinges: d.lattice.hinges.len(),
+        fixed_nodes: d.lattice.fixed.iter().filter(|f| **f).count(),
+        derivation_detail: d,
+    };
+    write_json(out.join("report.json"), &report)?;
+    if let Some(l) = &d.large_motion {
+        write_csv(
+            out.join("load_path.csv"),
+            &[
+                "load_factor",
+                "shell_displacement",
+                "max_node_error",
+                "rms_node_error",
+            ],
+            l.levels.iter().map(|r| {
+                vec![
+                    r.load_factor,
+                    r.shell_displacement,
+                    r.max_error,
+                    r.rms_error,
+                ]
+            }),
+        )?;
+        let series = vec![
+            Series::line(
+                "shell: largest displacement / size",
+                l.levels
+                    .iter()
+                    .map(|r| (r.load_factor, r.shell_displacement))
+                    .collect(),
+            ),
+            Series::line(
+                "springs: largest node error / size",
+                l.levels
+                    .iter()
+                    .map(|r| (r.load_factor, r.max_error))
+                    .collect(),
+            ),
+        ];
+        if l.levels.is_empty() {
+            return write_markdown(out, scene_label, d);
+        }
+        let options = PlotOptions::new(
+            "Large motion: the spring model on the shell's load path",
+            "load factor on the scene's loads",
+            "fraction of the size",
+        );
+        plot_series_with(&out.join("load_path.svg"), &options, &series)?;
+    }
+    write_markdown(out, scene_label, d)
+}
+
+fn write_markdown(out: &Path, scene_label: &str, d: &SpringsDerivation) -> Result<(), Error> {
+    nurbspring_io::atomic::write_atomic_bytes(
+        out.join("report.md"),
+        springs_markdown(scene_label, d).as_bytes(),
+    )?;
+    Ok(())
+}
+
+/// report.md of a spring derivation.
+pub fn springs_markdown(scene_label: &str, d: &SpringsDerivation) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Spring model of {scene_label}\n");
+    let _ = writeln!(s, "**Verdict.** {}.\n", d.verdict);
+    let _ = writeln!(
+        s,
+        "Rest-length springs and dihedral hinges on a triangulated lattice of {} nodes ({} \
+         fixed), {} springs, {} hinges; total mass {:.6e} kg; size (bounding-box diagonal) \
+         {:.6e} m (docs/math.md §11).\n",
+        d.lattice.n_nodes(),
+        d.lattice.fixed.iter().filter(|f| **f).count(),
+        d.lattice.springs.len(),
+        d.lattice.hinges.len(),
+        d.total_mass,
+        d.size
+    );
+    let _ = writeln!(s, "## Constants\n");
+    let _ = writeln!(s, "| class | elements | rule | calibrated |");
+    let _ = writeln!(s, "|---|---|---|---|");
+    for c in &d.constants {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.6e} | {:.6e} |",
+            c.class, c.count, c.rule, c.calibrated
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nCalibrated on the shell's lowest {} modes (Gauss–Newton on the log frequency ratios of the modes matched by MAC, RMS {:.3e}); \
+         every constant then times {:.6} for the exact lowest frequency.\n",
+        d.fitted_modes, d.fit_residual, d.frequency_factor
+    );
+    let _ = writeln!(s, "## Frequencies (matched by MAC)\n");
+    let _ = writeln!(
+        s,
+        "| shell mode | ω shell [rad/s] | spring mode | ω springs [rad/s] | MAC | error |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for r in &d.frequencies {
+        let opt = |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map_or("—".to_string(), f);
+        let _ = writeln!(
+            s,
+            "| {} | {:.6} | {} | {} | {} | {} |",
+            r.mode,
+            r.shell,
+            r.msm_mode.map_or("—".to_string(), |m| m.to_string()),
+            opt(r.msm, &|w| format!("{w:.6}")),
+            opt(r.mac, &|m| format!("{m:.3}")),
+            opt(r.relative_error, &|e| format!("{:+.2} %", 100.0 * e)),
+        );
+    }
+    let m = &d.small_motion;
+    let _ = writeln!(
+        s,
+        "\n## Small motion\n\nBoth models linearized at rest, moved by {}, Newmark with Δt = \
+         {:.4e} s over {:.0} periods of the lowest mode ({:.4e} s): the probe node {} against \
+         the shell's point at its (u, v), relative RMS **{:.2} %**.\n",
+        m.excitation,
+        m.dt,
+        m.periods,
+        m.t_end,
+        m.probe_node,
+        100.0 * m.relative_rms
+    );
+    let _ = writeln!(s, "## Large motion\n");
+    match (&d.large_motion, &d.large_motion_skipped) {
+        (Some(l), _) => {
+            let _ = writeln!(
+                s,
+                "The scene's loads times {:.4} (target: the shell's farthest node at ≥ {:.0} % \
+                 of the size). Static load path, each node against the surface point of its \
+                 (u, v):\n",
+                l.load_factor,
+                100.0 * LARGE_MOTION
+            );
+            if !l.levels.is_empty() {
+                let _ = writeln!(
+                    s,
+                    "| load factor | shell displacement / size | largest node error / size | RMS |"
+                );
+                let _ = writeln!(s, "|---|---|---|---|");
+                for r in &l.levels {
+                    let _ = writeln!(
+                        s,
+                        "| {:.4} | {:.2} % | {:.2} % | {:.2} % |",
+                        r.load_factor,
+                        100.0 * r.shell_displacement,
+                        100.0 * r.max_error,
+                        100.0 * r.rms_error
+                    );
+                }
+            }
+            if let Some(why) = &l.static_failure {
+                let _ = writeln!(s, "\nStatic comparison incomplete: {why}.");
+            }
+            match (&l.dynamic, &l.dynamic_failure) {
+                (Some(r), _) => {
+                    let _ = writeln!(
+                        s,
+                        "\nDynamic: the same loads applied at once, both models by {} with Δt = \
+                         {:.4e} s over {:.4e} s ({:.0} periods of the lowest elastic mode; the \
+                         shell's farthest node reaches {:.1} % of the size): largest node error \
+                         {:.2} % of the size, RMS over nodes and time {:.2} %.",
+                        r.integrator,
+                        r.dt,
+                        r.t_end,
+                        r.periods,
+                        100.0 * r.shell_displacement,
+                        100.0 * r.max_error,
+                        100.0 * r.rms_error
+                    );
+                }
+                (None, Some(why)) => {
+                    let _ = writeln!(s, "\nDynamic comparison not made: {why}.");
+                }
+                (None, None) => {}
+            }
+        }
+        (None, Some(why)) => {
+            let _ = writeln!(s, "Not run: {why}.");
+        }
+        (None, None) => {}
+    }
+    s
+}
