@@ -642,6 +642,9 @@ fn derive<'py>(
         })?,
         None => scene.derivation().0,
     };
+    if method == Method::Springs {
+        return derive_springs(py, scene);
+    }
     let key = if derivation.is_some() {
         "derivation"
     } else {
@@ -665,6 +668,27 @@ fn derive<'py>(
     .map_err(py_err)?;
     let label = scene.path.display().to_string();
     derivation_dict(py, &label, scene, &derived, None)
+}
+
+/// The spring derivation of a Kirchhoff–Love scene: report.json and msm.json as the CLI
+/// writes them (no central-node series: its runs compare every node).
+fn derive_springs<'py>(
+    py: Python<'py>,
+    scene: &nurbspring_scene::Scene,
+) -> PyResult<Bound<'py, PyDict>> {
+    use nurbspring_scene::springs_report::{SpringsReport, springs_msm_file};
+    let d = run_blocking(py, |cancel| {
+        nurbspring_scene::springs_report::derive_springs(scene, Some(cancel))
+    })?
+    .map_err(py_err)?;
+    let label = scene.path.display().to_string();
+    let out = PyDict::new(py);
+    out.set_item("report", json_text(&SpringsReport::new(&label, &d))?)?;
+    out.set_item("msm", json_text(&springs_msm_file(&label, scene, &d))?)?;
+    let empty = || f64_bytes(py, std::iter::empty());
+    out.set_item("central_node", (empty(), empty(), empty()))?;
+    out.set_item("warnings", Vec::<String>::new())?;
+    Ok(out)
 }
 
 /// The paper's experiment (Section IV) with its built-in scene.

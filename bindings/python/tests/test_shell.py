@@ -54,3 +54,17 @@ def test_simulate_a_shell(cli, tmp_path):
     probes = run["probes"].reshape(len(rows), -1)
     for mine, row in zip(probes, rows):
         assert [bits(x) for x in mine] == [bits(float(x)) for x in row[1:]]
+
+
+def test_springs_derivation_equals_the_cli(cli, tmp_path):
+    cloth = "examples/cloth_corners.toml"
+    d = ns.derive(ns.Scene.load(cloth))
+    assert d.report["derivation"] == "springs"
+    assert d.report["hinges"] > 0 and len(d.msm["hinges"]) == d.report["hinges"]
+    cli("derive", cloth, "--out", tmp_path / "d")
+    written = json.load(open(tmp_path / "d" / "report.json"))
+    assert written == d.report
+    assert json.load(open(tmp_path / "d" / "msm.json")) == d.msm
+    assert d.central_node["t"].size == 0
+    # The lowest elastic frequency is the shell's.
+    assert abs(d.report["frequencies"][0]["relative_error"]) < 1e-9

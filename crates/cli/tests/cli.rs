@@ -31,8 +31,8 @@ fn scene(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 /// Every example scene passes `check`; every tension-plate example `derive`s (the
-/// Kirchhoff–Love examples are run by `shell_examples_reproduce_their_benchmarks`, and
-/// `derive` refuses them naming material.model).
+/// Kirchhoff–Love examples are run by tests/shell.rs, their spring derivation too, and a
+/// tension-plate derivation refuses them naming material.model).
 #[test]
 fn every_example_checks() {
     let mut n = 0;
@@ -56,6 +56,8 @@ fn every_example_checks() {
                 let out = bin()
                     .arg("derive")
                     .arg(&path)
+                    .arg("--derivation")
+                    .arg("modal")
                     .arg("--out")
                     .arg(tempfile::tempdir().unwrap().path())
                     .assert()

@@ -140,3 +140,80 @@ fn cloth_example_falls_without_gaining_energy() {
         first[9] - last[9]
     );
 }
+
+/// `derive` of the cloth derives rest-length springs and hinges (the default for a shell):
+/// msm.json carries them and `simulate msm.json` runs it; report.md opens with the verdict and
+/// the lowest elastic frequency is the shell's.
+#[test]
+fn cloth_derives_springs_and_hinges_that_simulate() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d");
+    bin()
+        .arg("derive")
+        .arg(example("cloth_corners.toml"))
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["derivation"], "springs");
+    let first = report["frequencies"][0]["relative_error"].as_f64().unwrap();
+    assert!(first.abs() < 1e-9, "{first}");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        md.lines().nth(2).unwrap().starts_with("**Verdict.**"),
+        "{md}"
+    );
+    let msm: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("msm.json")).unwrap()).unwrap();
+    assert_eq!(
+        msm["hinges"].as_array().unwrap().len() as u64,
+        report["hinges"].as_u64().unwrap()
+    );
+    bin()
+        .arg("simulate")
+        .arg(out.join("msm.json"))
+        .arg("--model")
+        .arg("msm")
+        .arg("--t-end")
+        .arg("0.05")
+        .arg("--out")
+        .arg(dir.path().join("run"))
+        .assert()
+        .success();
+}
+
+/// What the spring lattice cannot carry is refused with the key: the quarter roof's symmetry
+/// edges (a lattice node is fixed whole), and the spring derivation of a tension plate.
+#[test]
+fn springs_refuse_symmetry_and_the_tension_plate() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = bin()
+        .arg("derive")
+        .arg(example("scordelis_lo.toml"))
+        .arg("--out")
+        .arg(dir.path().join("a"))
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        err.contains("constraints") && err.contains("symmetry"),
+        "{err}"
+    );
+    assert!(!dir.path().join("a").exists());
+    let out = bin()
+        .arg("derive")
+        .arg(example("sheet_gravity.toml"))
+        .arg("--derivation")
+        .arg("springs")
+        .arg("--out")
+        .arg(dir.path().join("b"))
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        err.contains("material.model") && err.contains("kirchhoff-love"),
+        "{err}"
+    );
+}

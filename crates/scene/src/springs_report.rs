@@ -8,7 +8,7 @@ use std::path::Path;
 use nurbspring_derive::{DeriveError, LARGE_MOTION, SpringsDerivation};
 use nurbspring_io::output::{write_csv, write_json};
 use nurbspring_io::plot::{PlotOptions, Series, plot_series_with};
-use nurbspring_msm::FileSimulation;
+use nurbspring_msm::{FileSimulation, MsmFile};
 use nurbspring_sim::IntegratorKind;
 use serde::Serialize;
 
@@ -39,7 +39,7 @@ pub fn derive_springs(
 
 /// report.json of a spring derivation.
 #[derive(Serialize)]
-struct SpringsReport<'a> {
+pub struct SpringsReport<'a> {
     scene: &'a str,
     derivation: &'static str,
     nodes: usize,
@@ -50,6 +50,39 @@ struct SpringsReport<'a> {
     derivation_detail: &'a SpringsDerivation,
 }
 
+impl<'a> SpringsReport<'a> {
+    /// The report of `d`, derived from the scene `scene_label`.
+    pub fn new(scene_label: &'a str, d: &'a SpringsDerivation) -> Self {
+        Self {
+            scene: scene_label,
+            derivation: "springs",
+            nodes: d.lattice.n_nodes(),
+            springs: d.lattice.springs.len(),
+            hinges: d.lattice.hinges.len(),
+            fixed_nodes: d.lattice.fixed.iter().filter(|f| **f).count(),
+            derivation_detail: d,
+        }
+    }
+}
+
+/// The msm.json of a spring derivation: run by `simulate msm.json` with the scene's Δt and
+/// end time, Newmark, from the scene's initial velocities.
+pub fn springs_msm_file(scene_label: &str, scene: &Scene, d: &SpringsDerivation) -> MsmFile {
+    let time = scene.time_settings();
+    let run = FileSimulation {
+        dt: time.dt,
+        t_end: time.t_end,
+        integrator: IntegratorKind::Newmark,
+    };
+    msm_file(
+        &d.lattice,
+        scene_label,
+        &d.node_velocities,
+        run,
+        &d.probe_nodes,
+    )
+}
+
 /// Writes every file of a spring derivation into `out` (each atomically).
 pub fn write_springs(
     out: &Path,
@@ -57,32 +90,13 @@ pub fn write_springs(
     scene: &Scene,
     d: &SpringsDerivation,
 ) -> Result<(), Error> {
-    let time = scene.time_settings();
-    let run = FileSimulation {
-        dt: time.dt,
-        t_end: time.t_end,
-        integrator: IntegratorKind::Newmark,
-    };
-    let msm = msm_file(
-        &d.lattice,
-        scene_label,
-        &d.node_velocities,
-        run,
-        &d.probe_nodes,
-    );
-    write_json(out.join("msm.json"), &msm)?;
+    write_json(
+        out.join("msm.json"),
+        &springs_msm_file(scene_label, scene, d),
+    )?;
     write_lattice_obj(&out.join("lattice.obj"), &d.lattice)?;
     write_lattice_vtu(&out.join("lattice.vtu"), &d.lattice)?;
-    let report = SpringsReport {
-        scene: scene_label,
-        derivation: "springs",
-        nodes: d.lattice.n_nodes(),
-        springs: d.lattice.springs.len(),
-        hinges: d.lattice.hinges.len(),
-        fixed_nodes: d.lattice.fixed.iter().filter(|f| **f).count(),
-        derivation_detail: d,
-    };
-    write_json(out.join("report.json"), &report)?;
+    write_json(out.join("report.json"), &SpringsReport::new(scene_label, d))?;
     if let Some(l) = &d.large_motion {
         write_csv(
             out.join("load_path.csv"),
