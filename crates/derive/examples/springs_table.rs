@@ -94,7 +94,7 @@ fn cases() -> Vec<Case> {
         out.push(Case {
             name: format!("flat plate clamped on one edge, point load at a free corner, {n}²"),
             surface: refined(&rectangle(0.4, 0.3), 3, (spans, spans)).unwrap(),
-            shell: steel.clone(),
+            shell: steel,
             loads: Loads {
                 point: vec![PointLoad {
                     u: 1.0,
@@ -113,7 +113,7 @@ fn cases() -> Vec<Case> {
                 (spans, spans),
             )
             .unwrap(),
-            shell: steel.clone(),
+            shell: steel,
             loads: Loads {
                 gravity: [0.0, 0.0, -9.81 * 40.0],
                 ..Loads::default()
@@ -123,7 +123,7 @@ fn cases() -> Vec<Case> {
         out.push(Case {
             name: format!("spherical zone clamped at its equator, gravity, {n}²"),
             surface: refined(&sphere_zone(0.5, 1.0), 3, (spans, spans)).unwrap(),
-            shell: steel.clone(),
+            shell: steel,
             loads: Loads {
                 gravity: [0.0, 0.0, -9.81 * 200.0],
                 ..Loads::default()
@@ -136,7 +136,7 @@ fn cases() -> Vec<Case> {
         out.push(Case {
             name: format!("cloth pinned at two corners, gravity, quadratic {n}²"),
             surface: refined(&rectangle(0.5, 0.5), 2, (spans, spans)).unwrap(),
-            shell: cloth.clone(),
+            shell: cloth,
             loads: Loads {
                 gravity: [0.0, 0.0, -9.81],
                 ..Loads::default()
@@ -162,7 +162,7 @@ fn main() {
         }
         let config = SpringsConfig {
             surface: case.surface.clone(),
-            shell: case.shell.clone(),
+            shell: case.shell,
             loads: case.loads.clone(),
             constraints: case.constraints.clone(),
             dnurbs: DnurbsOptions::default(),

@@ -166,7 +166,7 @@ pub fn derive_springs(
     let geometry = Geometry::Surface(config.surface.clone());
     let model = DnurbsModel::kirchhoff_love(
         geometry.clone(),
-        config.shell.clone(),
+        config.shell,
         config.loads.clone(),
         &config.constraints,
         config.dnurbs.clone(),
@@ -537,7 +537,7 @@ fn calibrate(
     let (msm_low, _) = springs_check::lowest_modes(&k, &masses, rigid.len() + RIGID_MODES)?;
     let omega1_msm = msm_low.into_iter().find(|&w| is_elastic(w)).unwrap_or(0.0);
     let omega1 = omega[0];
-    if !(omega1_msm > 0.0) {
+    if omega1_msm.is_nan() || omega1_msm <= 0.0 {
         return Err(DeriveError::SingularFit {
             detail: "the calibrated spring model has no positive lowest frequency (a free \
                      lattice or every class constant zero)"

@@ -448,7 +448,7 @@ impl Check<'_> {
         let build = |factor: f64| {
             DnurbsModel::kirchhoff_love(
                 geometry.clone(),
-                shell.clone(),
+                *shell,
                 loads.scaled(factor),
                 &config.constraints,
                 config.dnurbs.clone(),

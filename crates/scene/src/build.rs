@@ -354,7 +354,7 @@ impl Scene {
         let surface = self.to_surface()?;
         Ok(SpringsConfig {
             surface,
-            shell: shell.clone(),
+            shell: *shell,
             loads: self.build_loads(),
             constraints: self.build_constraints(),
             dnurbs: self.dnurbs.clone(),

@@ -139,7 +139,7 @@ pub fn write_springs(
             "load factor on the scene's loads",
             "fraction of the size",
         );
-        plot_series_with(&out.join("load_path.svg"), &options, &series)?;
+        plot_series_with(out.join("load_path.svg"), &options, &series)?;
     }
     write_markdown(out, scene_label, d)
 }
