@@ -638,6 +638,11 @@ fn node_errors(x: &[f64], target: &[[f64; 3]], size: f64) -> (f64, f64) {
 const STATIC_ITERATIONS: usize = 25;
 /// Relative residual at which an increment has converged.
 const STATIC_TOLERANCE: f64 = 1e-9;
+/// Relative residual below which a Newton step at round-off of the positions also counts as
+/// converged.
+const LOOSE_TOLERANCE: f64 = 1e-6;
+/// A Newton step this small against the largest coordinate is at round-off.
+const STEP_ROUND_OFF: f64 = 1e-13;
 
 /// The equilibrium `f_int(q) = λ f_ext` of a lattice at each `λ` of `lambdas` (ascending, in
 /// (0, 1]): load increments, Newton's method with the consistent tangent (LU) and a residual
@@ -664,6 +669,7 @@ pub fn static_path(
     };
     let size = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>().sqrt();
     let mut q = model.initial_positions().to_vec();
+    let length = q.iter().fold(0.0_f64, |m, x| m.max(x.abs())).max(f64::MIN_POSITIVE);
     let mut lambda = 0.0;
     let mut out = Vec::new();
     for &target in lambdas {
@@ -701,6 +707,13 @@ pub fn static_path(
                         break;
                     }
                     alpha *= 0.5;
+                }
+                // A full step at round-off of the positions: the residual's floor is the
+                // round-off of the internal forces (stiff springs), not the tolerance.
+                let moved = dq.iter().fold(0.0_f64, |m, d| m.max(d.abs()));
+                if moved <= STEP_ROUND_OFF * length && r0 <= LOOSE_TOLERANCE * f_norm {
+                    converged = true;
+                    break;
                 }
                 if !accepted {
                     break;
