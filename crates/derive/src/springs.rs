@@ -18,11 +18,11 @@
 //!   `Ē (1 − ν)/2` (−4.8 % at ν = 0.3).
 //! - Hinges (docs/math.md §5.2): weight `w_e = l_e² / A_e` (the discrete-shell scaling of
 //!   Grinspun et al. 2003, `|ē| / h̄_e` up to a constant), constants `k = D` on grid-line edges
-//!   and `D / 2` on diagonals, `D = E t³ / (12 (1 − ν²))`: on a square grid the hinges' energy
-//!   density is `½ D (κ₁₁² + κ₂₂² + 2 κ₁₂²)`, the isotropic plate with bending Poisson ratio
-//!   0. It differs from the plate's `½ D ((κ₁₁ + κ₂₂)² − 2 (1 − ν) K)` by `ν D K` (K the
-//!   Gaussian curvature), whose integral depends only on the boundary: nothing on clamped
-//!   edges, the Poisson part of the free-edge moments on free edges.
+//!   and `D (1 − ν) / 2` on diagonals, `D = E t³ / (12 (1 − ν²))`: on a square grid the
+//!   hinges store `½ D (κ₁₁² + κ₂₂² + 2 (1 − ν) κ₁₂²)` per unit area, the plate's energy
+//!   `½ D (κ₁₁² + κ₂₂² + 2ν κ₁₁κ₂₂ + 2 (1 − ν) κ₁₂²)` without its coupling term `ν D κ₁₁κ₂₂`
+//!   (no hinge sees the product of two curvatures): exact under cylindrical bending along a
+//!   grid line and under twist, `ν/(1 + ν)` soft under a spherical cap.
 //! - Calibration: the class constants `k_c = k⁰_c e^σ_c` by Gauss–Newton on
 //!   `ln(ω_i / ω_j)` of the shell's lowest [`SPRING_MODES`] elastic modes `j` and the spring
 //!   modes `i` matched to them by MAC (the derivative `∂ ln ω_i / ∂σ_c = k_c ψ_iᵀ G_c ψ_i /
@@ -331,7 +331,10 @@ fn apply_rules(
         (Class::Spring(SpringKind::Structural), 2.0 / 3.0 * e_bar),
         (Class::Spring(SpringKind::Shear), 4.0 / 3.0 * e_bar),
         (Class::Hinge(HingeKind::Grid), d),
-        (Class::Hinge(HingeKind::Diagonal), 0.5 * d),
+        (
+            Class::Hinge(HingeKind::Diagonal),
+            0.5 * d * (1.0 - shell.poisson),
+        ),
     ]);
     lattice.set_constants(&rule);
     let areas = dual_areas(lattice, surface)?;

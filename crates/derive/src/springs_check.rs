@@ -669,7 +669,10 @@ pub fn static_path(
     };
     let size = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>().sqrt();
     let mut q = model.initial_positions().to_vec();
-    let length = q.iter().fold(0.0_f64, |m, x| m.max(x.abs())).max(f64::MIN_POSITIVE);
+    let length = q
+        .iter()
+        .fold(0.0_f64, |m, x| m.max(x.abs()))
+        .max(f64::MIN_POSITIVE);
     let mut lambda = 0.0;
     let mut out = Vec::new();
     for &target in lambdas {
