@@ -529,13 +529,13 @@ impl Check<'_> {
                     out.static_error = out.levels.iter().map(|l| l.max_error).reduce(f64::max);
                 }
                 Err(DeriveError::Cancelled) => return Err(DeriveError::Cancelled),
-                Err(e) => out.static_failure = Some(e.to_string()),
+                Err(e) => out.static_failure = Some(reason(e)),
             }
         }
         match self.step_load(&scaled, &msm, &largest) {
             Ok(run) => out.dynamic = Some(run),
             Err(DeriveError::Cancelled) => return Err(DeriveError::Cancelled),
-            Err(e) => out.dynamic_failure = Some(e.to_string()),
+            Err(e) => out.dynamic_failure = Some(reason(e)),
         }
         Ok(out)
     }
@@ -619,6 +619,14 @@ impl Check<'_> {
             out[r / 3][r % 3] = f;
         }
         out
+    }
+}
+
+/// Why a validation run stopped, in the report's words.
+fn reason(e: DeriveError) -> String {
+    match e {
+        DeriveError::SingularFit { detail } => detail,
+        other => other.to_string(),
     }
 }
 
