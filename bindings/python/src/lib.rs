@@ -629,38 +629,24 @@ fn derive<'py>(
     progress: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let scene = &scene.inner;
-    let method = match derivation {
-        Some(s) => Method::parse(s).ok_or_else(|| {
-            bad_argument(
-                "derivation",
-                s,
-                format!(
-                    "unknown derivation; expected one of {}",
-                    Method::ALL.map(Method::name).join(", ")
-                ),
-            )
-        })?,
-        None => scene.derivation().0,
-    };
-    let key = if derivation.is_some() {
-        "derivation"
-    } else {
-        "fit.derivation"
-    };
+    let requested = derivation
+        .map(|s| {
+            Method::parse(s).ok_or_else(|| {
+                bad_argument(
+                    "derivation",
+                    s,
+                    format!(
+                        "unknown derivation; expected one of {}",
+                        Method::ALL.map(Method::name).join(", ")
+                    ),
+                )
+            })
+        })
+        .transpose()?;
+    let choice = scene.choose_derivation(requested.map(|m| (m, "derivation")));
     let derived = run_blocking(py, |cancel| -> Result<Derivation, Error> {
-        let config = scene.derivation_config(Some(method))?;
         let mut bar = progress_printer(progress, "mass scan");
-        let result = match config.method {
-            Method::Paper => nurbspring_derive::derive_msm(&config, Some(cancel), &mut bar),
-            _ => nurbspring_derive::derive_linear(&config, Some(cancel)),
-        };
-        let (derivation, _) = result.map_err(|e| {
-            // An option error names its own key; other input errors are the derivation's.
-            let named = matches!(e, nurbspring_derive::DeriveError::InvalidOption { .. });
-            let input = e.kind() == ErrorKind::Input;
-            Error::model(&scene.path, (input && !named).then_some(key), e)
-        })?;
-        Ok(derivation)
+        Ok(scene.derive(choice, Some(cancel), &mut bar)?.0)
     })?
     .map_err(py_err)?;
     let label = scene.path.display().to_string();

@@ -7,11 +7,12 @@ use nurbspring_geom::GeomError;
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::State;
 
+use crate::method::Method;
 use crate::modal_solution::{DENSE_MODES, ModalBasis};
 use crate::outcome::{FrequencyRow, MassReport, ProbeError, Regime, Validation};
 use crate::reference::{ReferenceKind, Watch, run_scalar, scalar_rows};
 use crate::scalar::{EnergyOrigin, ScalarSystem};
-use crate::setup::{Method, Setup};
+use crate::setup::Setup;
 use crate::validation::{compare, compare_points, energy_drift, match_modes};
 use crate::{DeriveError, Trajectory};
 

@@ -15,16 +15,18 @@ use crate::evaluation::{
     regime, triplicate, unloaded, validation, warnings, with_totals,
 };
 use crate::excitation::excitation_fit;
+use crate::method::LinearMethod;
 use crate::modal::{FITTED_MODES, SampledMode, element_priors, modal_fit};
 use crate::modal_solution::ModalBasis;
 use crate::nodes::NodeMap;
 use crate::outcome::{
-    Derivation, FitDetail, MassReport, NodeReduction, ParameterSet, ReductionReport, Spectrum,
+    Derivation, DerivedModel, FitDetail, MassReport, NodeReduction, ParameterSet, ReductionReport,
+    Spectrum,
 };
 use crate::pipeline::Judge;
 use crate::reference::{run_scalar, scalar_rows};
 use crate::scalar::{EnergyOrigin, ScalarSystem};
-use crate::setup::{Config, Method, Setup};
+use crate::setup::{Config, Setup};
 
 /// A load below this fraction of the largest is no load (round-off).
 const NO_LOAD: f64 = 1e-12;
@@ -399,15 +401,15 @@ fn symmetric_sparse(a: &DenseMatrix) -> SparseMatrix {
     SparseMatrix::from_dense(&sym, 0.0)
 }
 
-/// Derives a linear node model of the D-NURBS by `config.method` (modal, excitation or
-/// reduction) and validates it by exact modes; `cancel` stops between steps.
-pub fn derive_linear(
+/// Derives a linear node model of the D-NURBS by `method` (modal, excitation or reduction)
+/// and validates it by exact modes; `cancel` stops between steps.
+pub(crate) fn derive_linear(
     config: &Config,
+    method: LinearMethod,
     cancel: Option<Arc<AtomicBool>>,
 ) -> Result<(Derivation, Setup), DeriveError> {
-    let method = config.method;
     let setup = Setup::new(config)?;
-    let modes = DnurbsModes::new(&setup, method.name())?;
+    let modes = DnurbsModes::new(&setup, method.method().name())?;
     let map = NodeMap::new(&setup, &modes)?;
     let area = area_factors(&setup, config)?;
     let dual = dual_cell_masses(&setup, config, &area)?;
@@ -415,9 +417,10 @@ pub fn derive_linear(
     let mut warn = Vec::new();
     // A fitted model holds the D-NURBS's static deflection (its node forces are made for it);
     // otherwise, and for the reduction, the loads are carried by `Ω_ff⁻ᵀ`.
-    let deflection = match method {
-        Method::Modal | Method::Excitation => static_deflection(&modes, &map),
-        _ => None,
+    let deflection = if method.is_fitted() {
+        static_deflection(&modes, &map)
+    } else {
+        None
     };
     let forces = if deflection.is_some() {
         Vec::new()
@@ -437,8 +440,8 @@ pub fn derive_linear(
             })
             .collect()
     };
-    let (lattice, reduction_model, fit, node, rule) = match method {
-        Method::Modal | Method::Excitation => {
+    let (model, fit, node, rule) = match method {
+        LinearMethod::Modal | LinearMethod::Excitation => {
             let priors =
                 element_priors(setup.lattice(), config.material.stiffness_by_slot(), &area);
             let candidates = sampled_modes(&modes, &map, CANDIDATE_MODES);
@@ -455,7 +458,7 @@ pub fn derive_linear(
                 e.k = k;
             }
             lattice.elements.retain(|e| e.k > 0.0);
-            let (masses, fit, basis) = if method == Method::Excitation {
+            let (masses, fit, basis) = if method == LinearMethod::Excitation {
                 let (classes, stiffness) = class_stiffness(&lattice, &map.free);
                 let e = excitation_fit(
                     &modes,
@@ -499,9 +502,9 @@ pub fn derive_linear(
                 basis,
             )?;
             let rule = "one mass per free node, fitted with the element constants to the D-NURBS modes the lattice resolves near the reference masses (row sums of M_T), then scaled so that the lowest frequency matches".to_string();
-            (Some(lattice), None, fit, node, rule)
+            (DerivedModel::Lattice(lattice), fit, node, rule)
         }
-        Method::Reduction => {
+        LinearMethod::Reduction => {
             let (k_t, m_t, f_t) = reduction(&map, &modes)?;
             let guyan = !map.is_square();
             let node = node_system(
@@ -530,14 +533,7 @@ pub fn derive_linear(
                 kind: if guyan { "guyan" } else { "exact" },
             });
             let rule = "the node-space mass matrix M_T of the reduction (its row sums are listed as node masses)".to_string();
-            (None, Some(reduction), fit, node, rule)
-        }
-        Method::Paper => {
-            return Err(DeriveError::InvalidOption {
-                name: "fit.derivation",
-                value: "\"paper\"".into(),
-                reason: "the paper's derivation is not a linear one (derive_msm runs it)".into(),
-            });
+            (DerivedModel::Reduction(reduction), fit, node, rule)
         }
     };
     if cancelled() {
@@ -592,9 +588,9 @@ pub fn derive_linear(
         msm: triplicate(&node.basis.omega),
     };
     // Masses: the lattice's, or the reduction's row sums of M_T on the free nodes.
-    let node_masses: Vec<f64> = match &lattice {
-        Some(l) => l.masses.clone(),
-        None => {
+    let node_masses: Vec<f64> = match &model {
+        DerivedModel::Lattice(l) => l.masses.clone(),
+        DerivedModel::Reduction(_) => {
             let mut all = dual.clone();
             let sums = {
                 let mut y = vec![0.0; map.free.len()];
@@ -622,10 +618,10 @@ pub fn derive_linear(
     );
     let omega_max = node.basis.omega_max()?;
     let derived = ParameterSet {
-        constants: lattice
-            .as_ref()
-            .map(class_means)
-            .unwrap_or_else(Constants::new),
+        constants: match &model {
+            DerivedModel::Lattice(l) => class_means(l),
+            DerivedModel::Reduction(_) => Constants::new(),
+        },
         m: mean,
         omega_max,
         dt_critical: if omega_max > 0.0 {
@@ -640,7 +636,7 @@ pub fn derive_linear(
         explicit_run: None,
     };
     warn.extend(warnings(
-        method,
+        method.method(),
         &derived.validation,
         &second_excitation,
         &frequencies,
@@ -649,9 +645,7 @@ pub fn derive_linear(
         &regime,
     ));
     let derivation = Derivation {
-        method,
-        lattice,
-        reduction: reduction_model,
+        model,
         fit,
         mass,
         derived,

@@ -9,9 +9,9 @@ use serde::Serialize;
 
 use crate::Trajectory;
 use crate::fit::FitResult;
+use crate::method::Method;
 use crate::modal::ModalFitReport;
 use crate::reference::ReferenceKind;
-use crate::setup::Method;
 
 /// One mass candidate of the paper's scan.
 #[derive(Clone, Debug, Serialize)]
@@ -265,16 +265,21 @@ pub enum FitDetail {
     Reduction(ReductionReport),
 }
 
+/// The model a derivation yields.
+#[derive(Clone, Debug)]
+pub enum DerivedModel {
+    /// A lattice of nodes and elements (every derivation but the reduction).
+    Lattice(SpringLattice),
+    /// The node-space reduction (the `reduction` derivation: a linear model, not an MSM).
+    Reduction(NodeReduction),
+}
+
 /// Result of a derivation.
 #[derive(Clone, Debug)]
 pub struct Derivation {
-    /// Which derivation.
-    pub method: Method,
-    /// The derived lattice (`None` for the reduction).
-    pub lattice: Option<SpringLattice>,
-    /// The node-space reduction (the `reduction` derivation).
-    pub reduction: Option<NodeReduction>,
-    /// The fit.
+    /// The derived model.
+    pub model: DerivedModel,
+    /// The fit; its kind is the derivation's ([`Derivation::method`]).
     pub fit: FitDetail,
     /// The masses.
     pub mass: MassReport,
@@ -308,6 +313,32 @@ pub struct Derivation {
 }
 
 impl Derivation {
+    /// Which derivation this is.
+    pub fn method(&self) -> Method {
+        match &self.fit {
+            FitDetail::Paper(_) => Method::Paper,
+            FitDetail::Modal(_) => Method::Modal,
+            FitDetail::Excitation(_) => Method::Excitation,
+            FitDetail::Reduction(_) => Method::Reduction,
+        }
+    }
+
+    /// The derived lattice (`None` for the reduction).
+    pub fn lattice(&self) -> Option<&SpringLattice> {
+        match &self.model {
+            DerivedModel::Lattice(l) => Some(l),
+            DerivedModel::Reduction(_) => None,
+        }
+    }
+
+    /// The node-space reduction (the `reduction` derivation only).
+    pub fn reduction(&self) -> Option<&NodeReduction> {
+        match &self.model {
+            DerivedModel::Reduction(r) => Some(r),
+            DerivedModel::Lattice(_) => None,
+        }
+    }
+
     /// The paper's fit report (the paper's derivation only).
     pub fn paper_fit(&self) -> Option<&FitReport> {
         match &self.fit {

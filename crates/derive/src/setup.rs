@@ -14,6 +14,7 @@ use nurbspring_sim::{
 use serde::{Deserialize, Serialize};
 
 use crate::fit::{FitDofs, FitResult, StiffnessFit};
+use crate::method::Method;
 use crate::omega::NodeState;
 use crate::runner::{Watched, record_noted};
 use crate::{DeriveError, Omega, Trajectory};
@@ -107,52 +108,6 @@ pub struct TimeSettings {
     pub dnurbs_integrator: IntegratorKind,
     /// MSM integrator.
     pub msm_integrator: IntegratorKind,
-}
-
-/// Which derivation (scene key `fit.derivation`, `derive --derivation`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Class constants and node masses fitted to the lowest D-NURBS modes, then one mass
-    /// scale for the lowest frequency (docs/math.md §8.3; the default).
-    #[default]
-    Modal,
-    /// The paper's: eq. (15) and the eigenvalue scan of M (docs/math.md §6).
-    Paper,
-    /// The modal fit refined on the modes the scene's own loads and initial velocity excite.
-    Excitation,
-    /// The exact linear reduction of the D-NURBS onto the nodes (not an MSM: a reference).
-    Reduction,
-}
-
-impl Method {
-    /// Every derivation.
-    pub const ALL: [Method; 4] = [
-        Method::Modal,
-        Method::Paper,
-        Method::Excitation,
-        Method::Reduction,
-    ];
-
-    /// `"modal"`, `"paper"`, `"excitation"` or `"reduction"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Modal => "modal",
-            Method::Paper => "paper",
-            Method::Excitation => "excitation",
-            Method::Reduction => "reduction",
-        }
-    }
-
-    /// Parses a [`Method::name`].
-    pub fn parse(s: &str) -> Option<Method> {
-        Self::ALL.into_iter().find(|m| m.name() == s)
-    }
-
-    /// True for the derivations whose model is linear (validated by exact modes).
-    pub fn is_linear(self) -> bool {
-        self != Method::Paper
-    }
 }
 
 /// Everything a derivation needs (a scene, translated).

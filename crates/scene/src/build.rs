@@ -2,7 +2,9 @@
 //! options of the MSM, the derivation's configuration. Model errors come back as
 //! [`Error::Model`] naming the file and, where one caused it, the key.
 
-use nurbspring_derive::{Config, FitOptions, InitialConditions, MassChoice, Method, TimeSettings};
+use nurbspring_derive::{
+    Config, ElementClasses, FitOptions, InitialConditions, MassChoice, Method, TimeSettings,
+};
 use nurbspring_dnurbs::{
     Constraints, DnurbsModel, EdgeCondition, EdgeConstraint, EdgeLoad, Geometry, LinearConstraint,
     Loads, Material, PointLoad,
@@ -62,7 +64,7 @@ pub fn spring_constants(m: &MsmSpec) -> Constants {
 /// elements of `elements` (both regions, unit constants) for the others; on a curve only the
 /// kinds along u.
 pub fn element_classes(m: &MsmSpec, method: Method, curve: bool) -> Constants {
-    if method == Method::Paper {
+    if method.element_classes() == ElementClasses::Springs {
         return spring_constants(m);
     }
     let kinds: Vec<LinearKind> = match &m.elements {

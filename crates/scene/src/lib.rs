@@ -34,6 +34,7 @@
 //! ```
 
 mod build;
+mod derivation;
 mod error;
 pub mod export;
 pub mod geometry_file;
@@ -51,6 +52,7 @@ pub mod summary;
 mod validate;
 
 pub use build::{MsmOverrides, spring_constants};
+pub use derivation::{DERIVATION_KEY, DerivationChoice, PreparedDerivation};
 pub use error::Error;
 pub use scene::{MAX_FILE_BYTES, PAPER_SCENE};
 pub use scene_error::{Problem, SceneError, SceneErrorKind};

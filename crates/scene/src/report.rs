@@ -101,7 +101,7 @@ impl<'a> Report<'a> {
     ) -> Self {
         Self {
             scene: scene_label,
-            derivation: d.method,
+            derivation: d.method(),
             inputs: Inputs {
                 material: &scene.material,
                 loads: scene.build_loads(),
@@ -240,7 +240,7 @@ fn run_settings(scene: &Scene, d: &Derivation) -> FileSimulation {
 /// The `msm.json` of a derivation with a lattice (`None` for a node reduction): the lattice,
 /// the scene it came from, its initial velocities and the run settings it was validated with.
 pub fn derived_msm_file(scene_label: &str, scene: &Scene, d: &Derivation) -> Option<MsmFile> {
-    d.lattice.as_ref().map(|lattice| {
+    d.lattice().map(|lattice| {
         msm_file(
             lattice,
             scene_label,
@@ -287,13 +287,13 @@ pub fn write_derived_files_with(
     d: &Derivation,
     extra: &[(String, &Trajectory)],
 ) -> Result<(), Error> {
-    if let Some(lattice) = &d.lattice {
+    if let Some(lattice) = d.lattice() {
         let msm = derived_msm_file(scene_label, scene, d).expect("the derivation has a lattice");
         write_json(out.join("msm.json"), &msm)?;
         write_lattice_obj(&out.join("lattice.obj"), lattice)?;
         write_lattice_vtu(&out.join("lattice.vtu"), lattice)?;
     }
-    if let Some(r) = &d.reduction {
+    if let Some(r) = d.reduction() {
         write_json(
             out.join("reduction.json"),
             &reduction_file(scene_label, r, &d.node_velocities),
@@ -454,7 +454,7 @@ fn write_plots(
         Series::line(
             format!(
                 "MSM of the {} derivation: {}",
-                d.method.name(),
+                d.method().name(),
                 how_run(&d.derived)
             ),
             xy(&d.msm_trajectory.t, &d.msm_trajectory.component(0, axis)),
@@ -516,7 +516,7 @@ fn write_plots(
     };
     let shown = |v: &[f64]| v[..v.len().min(SPECTRUM_SHOWN)].to_vec();
     let (spectrum_dnurbs, spectrum_msm) = (shown(&d.spectrum.dnurbs), shown(&d.spectrum.msm));
-    let msm_name = format!("MSM of the {} derivation", d.method.name());
+    let msm_name = format!("MSM of the {} derivation", d.method().name());
 
     let mut jobs: Vec<PlotJob<'_>> = Vec::new();
     for ext in ["svg", "png"] {

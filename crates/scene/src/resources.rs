@@ -268,11 +268,7 @@ impl Scene {
     /// Lattice nodes along u and v for `method`'s default grid (or the scene's), from the
     /// scene's numbers alone.
     fn lattice_nodes(&self, method: Method) -> (f64, f64) {
-        let grid = self.msm.grid.unwrap_or(if method == Method::Paper {
-            LatticeGrid::Knots
-        } else {
-            LatticeGrid::Greville
-        });
+        let grid = self.msm.grid_for(method);
         match (&self.geometry, grid) {
             (GeometrySpec::Surface(s), LatticeGrid::Knots) => {
                 (distinct(&s.knots_u), distinct(&s.knots_v))
@@ -398,7 +394,7 @@ impl Scene {
                 // lowest TRUNCATED_MODES of each model instead (shift-invert Lanczos: its
                 // basis of 3r + 60 vectors, the modes, the factor of K − σM).
                 let scalar = n.max(nodes);
-                let truncated = matches!(method, Method::Modal | Method::Excitation)
+                let truncated = method.linear().is_some_and(|m| m.is_fitted())
                     && scalar > nurbspring_derive::DENSE_MODES as f64;
                 if truncated {
                     let r = nurbspring_derive::TRUNCATED_MODES as f64;

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use nurbspring_derive::{FitDofs, FitMethod, Method};
 use nurbspring_dnurbs::{DnurbsOptions, Edge, MaterialModel};
-use nurbspring_msm::LinearKind;
+use nurbspring_msm::{LinearKind, ParameterGrid};
 use nurbspring_sim::IntegratorKind;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::ser::Serializer;
@@ -462,13 +462,11 @@ impl MsmSpec {
             .unwrap_or_else(|| material.damping_per_mass() * m)
     }
 
-    /// The grid a derivation uses: the scene's, else the distinct knots for the paper's and
-    /// the Greville abscissae for the others.
+    /// The grid a derivation uses: the scene's, else the method's own
+    /// ([`Method::default_grid`]).
     pub fn grid_for(&self, method: Method) -> LatticeGrid {
-        self.grid.unwrap_or(match method {
-            Method::Paper => LatticeGrid::Knots,
-            _ => LatticeGrid::Greville,
-        })
+        self.grid
+            .unwrap_or_else(|| LatticeGrid::of(&method.default_grid()))
     }
 }
 
@@ -507,6 +505,15 @@ pub enum LatticeGrid {
 }
 
 impl LatticeGrid {
+    /// The scene's name for a lattice's parameter grid.
+    pub fn of(grid: &ParameterGrid) -> LatticeGrid {
+        match grid {
+            ParameterGrid::Knots => LatticeGrid::Knots,
+            ParameterGrid::Uniform { .. } => LatticeGrid::Uniform,
+            ParameterGrid::Greville => LatticeGrid::Greville,
+        }
+    }
+
     /// `"knots"`, `"uniform"` or `"greville"`.
     pub fn name(self) -> &'static str {
         match self {

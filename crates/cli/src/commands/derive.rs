@@ -4,8 +4,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use nurbspring_derive::Method;
+use nurbspring_scene::Scene;
 use nurbspring_scene::report::{constants_text, write_derivation};
-use nurbspring_scene::{Error, Scene};
 
 use crate::progress::Progress;
 use nurbspring_scene::resources::Job;
@@ -41,32 +41,12 @@ fn parse_method(s: &str) -> Result<Method, String> {
 /// Derives the MSM of a scene and writes every output.
 pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
-    let (method, fallback) = match args.derivation {
-        Some(m) => (m, None),
-        None => scene.derivation(),
-    };
-    ctx.check_resources(&scene, Job::Derive(method), Some(&args.out))?;
-    let config = scene.derivation_config(Some(method))?;
+    let choice = scene.choose_derivation(args.derivation.map(|m| (m, "--derivation")));
+    ctx.check_resources(&scene, Job::Derive(choice.method), Some(&args.out))?;
+    let prepared = scene.prepare_derivation(choice)?;
     let staged = stage_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
-    let cancel = Some(ctx.cancel.clone());
-    let key = if args.derivation.is_some() {
-        "--derivation"
-    } else {
-        "fit.derivation"
-    };
-    let result = match config.method {
-        Method::Paper => {
-            nurbspring_derive::derive_msm(&config, cancel, &mut |d, t| bar.update(d, t))
-        }
-        _ => nurbspring_derive::derive_linear(&config, cancel),
-    };
-    let (derivation, _) = result.map_err(|e| {
-        // An option error names its own key; other input errors are the derivation's.
-        let named = matches!(e, nurbspring_derive::DeriveError::InvalidOption { .. });
-        let input = e.kind() == nurbspring_sim::ErrorKind::Input;
-        Error::model(&scene.path, (input && !named).then_some(key), e)
-    })?;
+    let (derivation, _) = prepared.run(Some(ctx.cancel.clone()), &mut |d, t| bar.update(d, t))?;
     bar.finish();
     let label = args.scene.display().to_string();
     write_derivation(staged.path(), &label, &scene, &derivation, None, "")?;
@@ -76,10 +56,10 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     } else {
         let d = &derivation.derived;
         // What was derived: an MSM, or the exact reduction (a linear model, not an MSM).
-        let what = match derivation.method {
+        let what = match derivation.method() {
             Method::Reduction => format!(
                 "exact reduction onto {} free nodes (reduction.json: a linear node-space model, not an MSM; the reference an MSM is judged against)",
-                derivation.reduction.as_ref().map_or(0, |r| r.free.len())
+                derivation.reduction().map_or(0, |r| r.free.len())
             ),
             m => format!("derived MSM ({})", m.name()),
         };
@@ -104,7 +84,7 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
         );
         println!("Outputs in {}", out.display());
     }
-    if let (Some(why), true) = (fallback, ctx.verbose()) {
+    if let (Some(why), true) = (choice.fallback, ctx.verbose()) {
         eprintln!("note: {why}");
     }
     for w in &derivation.warnings {
@@ -116,7 +96,7 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
 /// The node masses of a derivation's result: one `m` when every free node has it, else their
 /// range and mean (the linear derivations fit one mass per node); the reduction's total.
 fn mass_text(derivation: &nurbspring_derive::Derivation, m: f64) -> String {
-    let free: Vec<f64> = match &derivation.lattice {
+    let free: Vec<f64> = match derivation.lattice() {
         Some(l) => l
             .masses
             .iter()

@@ -37,8 +37,9 @@ pub fn run(ctx: &Context, args: PaperArgs) -> CmdResult {
     // The default derivation of the same scene, whose MSM the central node's figure shows
     // beside the paper's: what this project adds.
     let modal_config = scene.derivation_config(Some(nurbspring_derive::Method::Modal))?;
-    let (modal, _) = nurbspring_derive::derive_linear(&modal_config, Some(ctx.cancel.clone()))
-        .map_err(model_error)?;
+    let (modal, _) =
+        nurbspring_derive::derive(&modal_config, Some(ctx.cancel.clone()), &mut |_, _| {})
+            .map_err(model_error)?;
     let modal_curve = (
         format!(
             "MSM of the default (modal) derivation: {}",

@@ -1,0 +1,142 @@
+//! The derivations ([`Method`]) and the one place that runs each: [`derive`]. A method knows
+//! its default lattice grid and the element classes its lattice is built of; the linear
+//! derivations have their own type ([`LinearMethod`]), so that the paper's cannot reach them.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use nurbspring_msm::ParameterGrid;
+use serde::{Deserialize, Serialize};
+
+use crate::outcome::Derivation;
+use crate::setup::{Config, Setup};
+use crate::{DeriveError, linear, pipeline};
+
+/// Which derivation (scene key `fit.derivation`, `derive --derivation`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Class constants and node masses fitted to the lowest D-NURBS modes, then one mass
+    /// scale for the lowest frequency (docs/math.md §8.3; the default).
+    #[default]
+    Modal,
+    /// The paper's: eq. (15) and the eigenvalue scan of M (docs/math.md §6).
+    Paper,
+    /// The modal fit refined on the modes the scene's own loads and initial velocity excite.
+    Excitation,
+    /// The exact linear reduction of the D-NURBS onto the nodes (not an MSM: a reference).
+    Reduction,
+}
+
+/// The element classes a derivation's lattice is built of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ElementClasses {
+    /// The paper's springs: structural, shear and bending, each class with its constant.
+    Springs,
+    /// The linear elements (docs/math.md §8.1), one constant per element, fitted.
+    LinearElements,
+}
+
+/// The linear derivations (docs/math.md §8): a node-space linear model judged by its exact
+/// modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinearMethod {
+    /// [`Method::Modal`].
+    Modal,
+    /// [`Method::Excitation`].
+    Excitation,
+    /// [`Method::Reduction`].
+    Reduction,
+}
+
+impl Method {
+    /// Every derivation.
+    pub const ALL: [Method; 4] = [
+        Method::Modal,
+        Method::Paper,
+        Method::Excitation,
+        Method::Reduction,
+    ];
+
+    /// `"modal"`, `"paper"`, `"excitation"` or `"reduction"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Modal => "modal",
+            Method::Paper => "paper",
+            Method::Excitation => "excitation",
+            Method::Reduction => "reduction",
+        }
+    }
+
+    /// Parses a [`Method::name`].
+    pub fn parse(s: &str) -> Option<Method> {
+        Self::ALL.into_iter().find(|m| m.name() == s)
+    }
+
+    /// The linear derivation this is, if it is one.
+    pub fn linear(self) -> Option<LinearMethod> {
+        match self {
+            Method::Modal => Some(LinearMethod::Modal),
+            Method::Excitation => Some(LinearMethod::Excitation),
+            Method::Reduction => Some(LinearMethod::Reduction),
+            Method::Paper => None,
+        }
+    }
+
+    /// True for the derivations whose model is linear (validated by exact modes).
+    pub fn is_linear(self) -> bool {
+        self.linear().is_some()
+    }
+
+    /// The lattice grid when the scene names none: the distinct knots for the paper's (its
+    /// "u_i ∈ U"), the Greville abscissae (one node per control point) for the others.
+    pub fn default_grid(self) -> ParameterGrid {
+        match self.element_classes() {
+            ElementClasses::Springs => ParameterGrid::Knots,
+            ElementClasses::LinearElements => ParameterGrid::Greville,
+        }
+    }
+
+    /// The element classes of the lattice: the paper's springs for the paper's derivation,
+    /// linear elements for the others.
+    pub fn element_classes(self) -> ElementClasses {
+        match self {
+            Method::Paper => ElementClasses::Springs,
+            Method::Modal | Method::Excitation | Method::Reduction => {
+                ElementClasses::LinearElements
+            }
+        }
+    }
+}
+
+impl LinearMethod {
+    /// The [`Method`] this is.
+    pub fn method(self) -> Method {
+        match self {
+            LinearMethod::Modal => Method::Modal,
+            LinearMethod::Excitation => Method::Excitation,
+            LinearMethod::Reduction => Method::Reduction,
+        }
+    }
+
+    /// True for the derivations that fit element constants and node masses to the D-NURBS
+    /// modes (modal, excitation); false for the exact reduction.
+    pub fn is_fitted(self) -> bool {
+        self != LinearMethod::Reduction
+    }
+}
+
+/// Runs the derivation `config.method`: the one place that chooses between them. `cancel`
+/// stops between steps; `progress(done, total)` follows the paper's mass scan.
+pub fn derive(
+    config: &Config,
+    cancel: Option<Arc<AtomicBool>>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Derivation, Setup), DeriveError> {
+    match config.method {
+        Method::Paper => pipeline::derive_msm(config, cancel, progress),
+        Method::Modal => linear::derive_linear(config, LinearMethod::Modal, cancel),
+        Method::Excitation => linear::derive_linear(config, LinearMethod::Excitation, cancel),
+        Method::Reduction => linear::derive_linear(config, LinearMethod::Reduction, cancel),
+    }
+}
