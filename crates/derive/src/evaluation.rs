@@ -7,6 +7,7 @@ use nurbspring_geom::GeomError;
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::State;
 
+use crate::error::Input;
 use crate::method::Method;
 use crate::modal_solution::{DENSE_MODES, ModalBasis};
 use crate::outcome::{FrequencyRow, MassReport, ProbeError, Regime, Validation};
@@ -224,8 +225,8 @@ pub fn impulse(setup: &Setup, speed: f64) -> Result<State, DeriveError> {
             let d = |p: (f64, f64)| (p.0 - target.0).powi(2) + (p.1 - target.1).powi(2);
             d(a.1).total_cmp(&d(b.1))
         })
-        .ok_or_else(|| DeriveError::InvalidOption {
-            name: "constraints",
+        .ok_or_else(|| DeriveError::InvalidInput {
+            input: Input::Constraints,
             value: "every control point fixed".into(),
             reason: "the second excitation needs a free control point".into(),
         })?;

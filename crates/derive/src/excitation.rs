@@ -110,11 +110,7 @@ pub fn excitation_fit(
     }
     let total: f64 = amplitude.iter().map(|a| a.1).sum();
     if total.is_nan() || total <= 0.0 {
-        return Err(DeriveError::InvalidOption {
-            name: "initial.velocity",
-            value: "0 everywhere, and no displacement or load".into(),
-            reason: "the excitation derivation weights the modes the scene's initial velocity and loads excite, and this scene excites none (give initial.velocity, initial.displacement or loads)".into(),
-        });
+        return Err(DeriveError::NoExcitation);
     }
     amplitude.sort_by(|a, b| b.1.total_cmp(&a.1));
     amplitude.truncate(EXCITED_MODES);

@@ -58,7 +58,7 @@ mod setup;
 mod test_scenes;
 mod validation;
 
-pub use error::DeriveError;
+pub use error::{DeriveError, Input, ScalarObstacle};
 pub use evaluation::{
     DnurbsModes, LINEAR_RANGE, MATCH_WINDOW, PERIODS, REGIME_FREQUENCY, REGIME_MODES, TABLE_MODES,
     WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_MODE_FREQUENCY, WARN_RELATIVE_RMS, horizon,

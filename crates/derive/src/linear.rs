@@ -9,7 +9,7 @@ use nurbspring_dnurbs::Integration;
 use nurbspring_linalg::{DenseMatrix, LuSolver, SparseMatrix, SpdSolver, symmetric_eigen};
 use nurbspring_msm::{Class, Constants, SpringLattice};
 
-use crate::DeriveError;
+use crate::error::{DeriveError, Input};
 use crate::evaluation::{
     DnurbsModes, REGIME_MODES, frequency_table, impulse, initial_speed, matched_modes, node_watch,
     regime, triplicate, unloaded, validation, warnings, with_totals,
@@ -326,16 +326,13 @@ fn reduction(
     let sys = &modes.system;
     let (nn, nc) = (map.free.len(), sys.n());
     if nn > nc {
-        return Err(DeriveError::InvalidOption {
-            name: "msm.grid",
-            value: format!("{nn} free nodes"),
-            reason: format!(
-                "the reduction needs at most as many free nodes as free control points ({nc}); use grid = \"greville\""
-            ),
+        return Err(DeriveError::TooManyNodes {
+            free_nodes: nn,
+            control_points: nc,
         });
     }
-    let solver = SpdSolver::new(&sys.stiffness).map_err(|e| DeriveError::InvalidOption {
-        name: "material",
+    let solver = SpdSolver::new(&sys.stiffness).map_err(|e| DeriveError::InvalidInput {
+        input: Input::Material,
         value: "K".into(),
         reason: format!(
             "the reduction needs a positive-definite stiffness on the free control points: {e}"
@@ -370,8 +367,8 @@ fn reduction(
             .filter(|&a| v[a].abs() > 0.1)
             .map(|a| map.free[a])
             .collect();
-        return Err(DeriveError::InvalidOption {
-            name: "msm.grid",
+        return Err(DeriveError::InvalidInput {
+            input: Input::Grid,
             value: format!("eigenvalue {l:e} of Ω K⁻¹ Ωᵀ"),
             reason: format!(
                 "the reduction is singular: the nodes {worst:?} do not determine the surface"

@@ -3,7 +3,7 @@
 
 use nurbspring_linalg::{DenseMatrix, SparseMatrix, symmetric_eigen};
 
-use crate::DeriveError;
+use crate::error::{DeriveError, Input};
 
 /// Largest matrix (rows) whose eigenvalues are computed densely.
 pub const MAX_DENSE_EIGEN: usize = 4000;
@@ -19,8 +19,8 @@ pub fn mass_eigenvalues(m: &SparseMatrix) -> Result<Vec<f64>, DeriveError> {
     let decomposed = factor.as_ref().unwrap_or(m);
     if !within_dense_solve(decomposed) {
         // A scan needs them; with the mass fixed they are only listed (see `mass_step`).
-        return Err(DeriveError::InvalidOption {
-            name: "fit.mass",
+        return Err(DeriveError::InvalidInput {
+            input: Input::Mass,
             value: "\"eigenvalue-scan\"".to_string(),
             reason: format!(
                 "the mass matrix's eigenproblem has {} rows, more than the {MAX_DENSE_EIGEN} of a dense eigenvalue scan",
@@ -103,8 +103,8 @@ mod tests {
         assert!(mass_eigenvalues_computable(&diagonal(4000)));
         assert!(!mass_eigenvalues_computable(&diagonal(4001)));
         match mass_eigenvalues(&diagonal(4001)) {
-            Err(DeriveError::InvalidOption { name, reason, .. }) => {
-                assert_eq!(name, "fit.mass");
+            Err(DeriveError::InvalidInput { input, reason, .. }) => {
+                assert_eq!(input, Input::Mass);
                 assert!(reason.contains("4001 rows"), "{reason}");
             }
             other => panic!("{other:?}"),

@@ -12,7 +12,7 @@ use crate::outcome::Derivation;
 use crate::setup::{Config, Setup};
 use crate::{DeriveError, linear, pipeline};
 
-/// Which derivation (scene key `fit.derivation`, `derive --derivation`).
+/// Which derivation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {

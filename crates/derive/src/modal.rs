@@ -29,7 +29,7 @@ use nurbspring_linalg::{
 use nurbspring_msm::{Class, Constants, LinearKind, SpringLattice};
 use serde::Serialize;
 
-use crate::DeriveError;
+use crate::error::{DeriveError, Input};
 use crate::fnnls::BlockQp;
 use crate::modal_solution::ModalBasis;
 use crate::validation::match_modes;
@@ -449,8 +449,8 @@ pub fn modal_fit(
     candidates: &[SampledMode],
     reference: &[f64],
 ) -> Result<ModalSolution, DeriveError> {
-    let refused = |reason: &str| DeriveError::InvalidOption {
-        name: "fit.derivation",
+    let refused = |reason: &str| DeriveError::InvalidInput {
+        input: Input::Derivation,
         value: "\"modal\"".into(),
         reason: reason.to_string(),
     };
@@ -497,8 +497,8 @@ pub fn modal_fit(
         });
     }
     if fitted.is_empty() {
-        return Err(DeriveError::InvalidOption {
-            name: "msm.elements",
+        return Err(DeriveError::InvalidInput {
+            input: Input::Elements,
             value: format!("{} elements", lattice.elements.len()),
             reason: "no element acts on a free node, or the material has no stiffness".into(),
         });
@@ -577,8 +577,8 @@ impl Problem<'_> {
         let (lattice, priors, reference, fitted) =
             (*lattice, *priors, *reference, fitted.as_slice());
         let n = free.len();
-        let refused = |reason: &str| DeriveError::InvalidOption {
-            name: "fit.derivation",
+        let refused = |reason: &str| DeriveError::InvalidInput {
+            input: Input::Derivation,
             value: "\"modal\"".into(),
             reason: reason.to_string(),
         };

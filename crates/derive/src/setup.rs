@@ -138,8 +138,8 @@ pub struct Config {
     /// Constants and node mass given by the scene (for the paper's scene, the published
     /// ones), evaluated beside the derived ones.
     pub given: Option<(Constants, f64)>,
-    /// The damping coefficient of every node of the paper's lattice when the scene gives one
-    /// (`msm.damping`); `None`: the D-NURBS's damping per unit mass, `γ/μ` times the node
+    /// The damping coefficient of every node of the paper's lattice when the scene gives one;
+    /// `None`: the D-NURBS's damping per unit mass, `γ/μ` times the node
     /// mass (the D-NURBS's `D = (γ/μ) M`, as the linear derivations' nodes carry it).
     pub node_damping: Option<f64>,
 }
@@ -333,7 +333,7 @@ impl Setup {
         lattice
     }
 
-    /// The damping coefficient of a node of mass `m`: the scene's `msm.damping` when it gives
+    /// The damping coefficient of a node of mass `m`: the scene's node damping when it gives
     /// one, else `γ/μ · m` (the D-NURBS's damping per unit mass).
     pub fn node_damping(&self, m: f64) -> f64 {
         self.node_damping.unwrap_or(self.damping_ratio * m)

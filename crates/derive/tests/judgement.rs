@@ -940,7 +940,13 @@ fn a_reduction_whose_nodes_do_not_determine_the_surface_is_refused() {
     };
     let text = e.to_string();
     assert!(
-        text.contains("msm.grid") && text.contains("the reduction is singular"),
+        matches!(
+            e,
+            nurbspring_derive::DeriveError::InvalidInput {
+                input: nurbspring_derive::Input::Grid,
+                ..
+            }
+        ) && text.contains("the reduction is singular"),
         "{text}"
     );
     // The nodes named carry the null combination: at least two of them (no single node's
@@ -999,5 +1005,8 @@ fn the_excitation_derivation_refuses_a_scene_without_excitation() {
     let Err(e) = derive(&config, None, &mut |_, _| {}) else {
         panic!("a scene without excitation must be refused");
     };
-    assert!(e.to_string().contains("initial.velocity"), "{e}");
+    assert!(
+        matches!(e, nurbspring_derive::DeriveError::NoExcitation),
+        "{e}"
+    );
 }

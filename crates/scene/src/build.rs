@@ -136,17 +136,16 @@ impl Scene {
     /// needs the tension plate.
     pub(crate) fn tension_plate(&self, what: &str) -> Result<&Material, Error> {
         self.material.tension_plate().ok_or_else(|| {
-            self.model_error(
+            Error::refused(
+                &self.path,
                 Some("material.model"),
-                nurbspring_derive::DeriveError::InvalidOption {
-                    name: "material",
-                    value: "\"kirchhoff-love\"".to_string(),
-                    reason: format!(
-                        "{what} works on tension-plate scenes (the paper's energy); the \
-                         Kirchhoff–Love shell runs with check, steady, modes, matrices, simulate \
-                         --model dnurbs, eval, export and refine"
-                    ),
-                },
+                "material",
+                "\"kirchhoff-love\"",
+                format!(
+                    "{what} works on tension-plate scenes (the paper's energy); the \
+                     Kirchhoff–Love shell runs with check, steady, modes, matrices, simulate \
+                     --model dnurbs, eval, export and refine"
+                ),
             )
         })
     }

@@ -70,10 +70,11 @@ impl Scene {
         self.prepare_derivation(choice)?.run(cancel, progress)
     }
 
-    /// An error of a derivation of this scene, with the key behind it: an option error names
-    /// its own key; other input errors are the derivation's (`key`, the one that chose it).
+    /// An error of a derivation of this scene, with the key behind it: an input the
+    /// derivation refuses names its own key ([`crate::keys::refusal`]); other input errors
+    /// are the derivation's (`key`, the one that chose it).
     pub fn derive_error(&self, key: &str, e: DeriveError) -> Error {
-        let named = matches!(e, DeriveError::InvalidOption { .. });
+        let named = crate::keys::refusal(&e).is_some();
         let input = e.kind() == ErrorKind::Input;
         Error::model(&self.path, (input && !named).then_some(key), e)
     }

@@ -38,6 +38,7 @@ mod derivation;
 mod error;
 pub mod export;
 pub mod geometry_file;
+pub mod keys;
 pub mod markdown;
 pub mod msm_export;
 pub mod msm_file;

@@ -151,15 +151,7 @@ fn integrator_error(
     if request.integrator.is_some() {
         Error::option("--integrator", integrator, reason)
     } else {
-        Error::model(
-            path,
-            Some(key),
-            DeriveError::InvalidOption {
-                name: "integrator",
-                value: integrator.to_string(),
-                reason,
-            },
-        )
+        Error::refused(path, Some(key), "integrator", integrator, reason)
     }
 }
 

@@ -324,8 +324,8 @@ fn derivation_refusals_name_the_key() {
     .unwrap()
     .replace("velocity = [0, 0, -0.1]", "velocity = [0, 0, 0]");
     let quiet = Scene::from_str(&text, "quiet.toml").unwrap();
-    let Err(e) = nurbspring_derive::derive(
-        &quiet.derivation_config(Some(Method::Excitation)).unwrap(),
+    let Err(e) = quiet.derive(
+        quiet.choose_derivation(Some((Method::Excitation, "derivation"))),
         None,
         &mut |_, _| {},
     ) else {
@@ -342,8 +342,8 @@ fn derivation_refusals_name_the_key() {
         "[msm]\ngrid = \"uniform\"\nnodes_u = 15\nnodes_v = 12\n[initial]",
     );
     let fine = Scene::from_str(&text, "fine.toml").unwrap();
-    let Err(e) = nurbspring_derive::derive(
-        &fine.derivation_config(Some(Method::Reduction)).unwrap(),
+    let Err(e) = fine.derive(
+        fine.choose_derivation(Some((Method::Reduction, "derivation"))),
         None,
         &mut |_, _| {},
     ) else {
@@ -378,11 +378,7 @@ fn linear_constraints_fall_back_to_the_paper() {
     )
     .unwrap();
     assert_eq!(named.derivation(), (Method::Modal, None));
-    let Err(e) = nurbspring_derive::derive(
-        &named.derivation_config(None).unwrap(),
-        None,
-        &mut |_, _| {},
-    ) else {
+    let Err(e) = named.derive(named.choose_derivation(None), None, &mut |_, _| {}) else {
         panic!("the modal derivation cannot take linear constraints")
     };
     assert!(e.to_string().contains("constraints.linear"), "{e}");
