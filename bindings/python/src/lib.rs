@@ -12,15 +12,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{RecvTimeoutError, channel};
 use std::time::Duration;
 
-use nurbspring_derive::{Derivation, Method, Trajectory};
 use nurbspring_scene::export::DofsFile;
 use nurbspring_scene::msm_file::{MsmSetup, msm_setup_from_text, read_msm_file};
 use nurbspring_scene::report::{Report, derived_msm_file};
 use nurbspring_scene::run::{
     RunRequest, Simulated, SteadyRequest, simulate_dnurbs, simulate_msm, steady_state,
 };
-use nurbspring_scene::{Error, MsmOverrides};
-use nurbspring_sim::{ErrorKind, IntegratorKind};
+use nurbspring_scene::{
+    Derivation, Error, ErrorKind, IntegratorKind, Method, MsmOverrides, Trajectory,
+};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -156,7 +156,7 @@ fn integrator(name: Option<&str>) -> PyResult<Option<IntegratorKind>> {
                 s,
                 format!(
                     "unknown integrator; expected one of {}",
-                    nurbspring_dnurbs::integrator_names(&IntegratorKind::ALL)
+                    nurbspring_scene::integrator_names(&IntegratorKind::ALL)
                 ),
             )
         })
@@ -265,7 +265,7 @@ impl Scene {
         Ok(names
             .iter()
             .map(|&name| {
-                let pick = |x: &nurbspring_geom::SurfaceDerivatives| match name {
+                let pick = |x: &nurbspring_scene::SurfaceDerivatives| match name {
                     "point" => x.point,
                     "u" => x.u,
                     "v" => x.v,
@@ -301,7 +301,7 @@ impl Scene {
         Ok(names
             .iter()
             .map(|&name| {
-                let pick = |x: &nurbspring_geom::CurveDerivatives| match name {
+                let pick = |x: &nurbspring_scene::CurveDerivatives| match name {
                     "point" => x.point,
                     "u" => x.u,
                     _ => x.uu,
@@ -315,7 +315,7 @@ impl Scene {
 /// CSC of `a` transposed, that is CSR of `a`: `(nrows, ncols, indptr, indices, data)`.
 fn csr<'py>(
     py: Python<'py>,
-    a: &nurbspring_linalg::SparseMatrix,
+    a: &nurbspring_scene::SparseMatrix,
 ) -> Bound<'py, pyo3::types::PyTuple> {
     let t = a.transpose();
     pyo3::types::PyTuple::new(
@@ -605,7 +605,7 @@ fn derivation_dict<'py>(
     label: &str,
     scene: &nurbspring_scene::Scene,
     d: &Derivation,
-    paper: Option<&nurbspring_derive::paper::PaperReport>,
+    paper: Option<&nurbspring_scene::PaperReport>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
     out.set_item("report", json_text(&Report::new(label, scene, d, paper))?)?;
@@ -659,15 +659,13 @@ fn derive<'py>(
 fn paper(py: Python<'_>, progress: bool) -> PyResult<Bound<'_, PyDict>> {
     let scene = nurbspring_scene::Scene::paper().map_err(|e| py_err(e.into()))?;
     let (derivation, report) = run_blocking(py, |cancel| {
-        let config = scene.derivation_config(Some(Method::Paper))?;
         let mut bar = progress_printer(progress, "mass scan");
-        nurbspring_derive::paper::reproduce_cancellable(&config, Some(cancel), &mut bar)
-            .map_err(|e| Error::model(&scene.path, None, e))
+        scene.reproduce_paper(Some(cancel), &mut bar)
     })?
     .map_err(py_err)?;
     derivation_dict(
         py,
-        "built-in paper scene (examples/paper.toml)",
+        nurbspring_scene::paper::PAPER_LABEL,
         &scene,
         &derivation,
         Some(&report),

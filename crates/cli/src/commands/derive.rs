@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use nurbspring_derive::Method;
+use nurbspring_scene::Method;
 use nurbspring_scene::Scene;
 use nurbspring_scene::report::{constants_text, write_derivation};
 
@@ -95,7 +95,7 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
 
 /// The node masses of a derivation's result: one `m` when every free node has it, else their
 /// range and mean (the linear derivations fit one mass per node); the reduction's total.
-fn mass_text(derivation: &nurbspring_derive::Derivation, m: f64) -> String {
+fn mass_text(derivation: &nurbspring_scene::Derivation, m: f64) -> String {
     let free: Vec<f64> = match derivation.lattice() {
         Some(l) => l
             .masses

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use nurbspring_dnurbs::Geometry;
+use nurbspring_scene::Geometry;
 use nurbspring_scene::export::{TessellationFormat, write_tessellation};
 use nurbspring_scene::{Error, Scene};
 use serde_json::json;
@@ -96,7 +96,7 @@ pub fn run(_ctx: &Context, args: EvalArgs) -> CmdResult {
     let order = args.derivatives as usize;
     let mut points = Vec::new();
     for at in &args.at {
-        let outside = |e: nurbspring_geom::GeomError| Error::option("--at", at, e.to_string());
+        let outside = |e: nurbspring_scene::GeomError| Error::option("--at", at, e.to_string());
         match &geometry {
             Geometry::Surface(s) => {
                 let uv = parse_params(at, 2)?;

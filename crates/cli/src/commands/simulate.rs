@@ -5,8 +5,8 @@ use std::sync::atomic::Ordering;
 
 use clap::{Args, ValueEnum};
 use nurbspring_scene::run::{RunRequest, Simulated, simulate_dnurbs, simulate_msm, write_run};
-use nurbspring_scene::{DEFAULT_MAX_FRAMES, Error, Scene};
-use nurbspring_sim::{IntegratorKind, RunSummary, Schedule};
+use nurbspring_scene::{DEFAULT_MAX_FRAMES, Error, IntegratorKind, RunSummary, Scene, Schedule};
+
 use serde_json::json;
 
 use crate::commands::{IntegratorChoice, MsmFlags, flag};
