@@ -335,6 +335,45 @@ impl TessellationFormat {
     }
 }
 
+/// The point of `geometry` at `params` (`[u, v]`, a curve `[u]`) and its derivatives up to
+/// `order` (at most 2), as `eval` prints it: `{"u", "v", "point", "d": {"u", "v", "uu", "uv",
+/// "vv"}}`.
+pub fn point_json(
+    geometry: &Geometry,
+    params: &[f64],
+    order: usize,
+) -> Result<serde_json::Value, nurbspring_geom::GeomError> {
+    use serde_json::json;
+    Ok(match geometry {
+        Geometry::Surface(s) => {
+            let d = s.derivatives(params[0], params[1], order)?;
+            let mut entry = json!({"u": params[0], "v": params[1], "point": d.point});
+            if order >= 1 {
+                let mut dd = json!({"u": d.u, "v": d.v});
+                if order >= 2 {
+                    dd["uu"] = json!(d.uu);
+                    dd["uv"] = json!(d.uv);
+                    dd["vv"] = json!(d.vv);
+                }
+                entry["d"] = dd;
+            }
+            entry
+        }
+        Geometry::Curve(c) => {
+            let d = c.derivatives(params[0], order)?;
+            let mut entry = json!({"u": params[0], "point": d.point});
+            if order >= 1 {
+                let mut dd = json!({"u": d.u});
+                if order >= 2 {
+                    dd["uu"] = json!(d.uu);
+                }
+                entry["d"] = dd;
+            }
+            entry
+        }
+    })
+}
+
 /// The surface on an `nu × nv` uniform parameter grid (a curve: `nu` points) written to
 /// `out` in `format` (a curve has no `.vts`: it is written as `.vtu`).
 pub fn write_tessellation(

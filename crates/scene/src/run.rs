@@ -74,6 +74,49 @@ pub struct Simulated {
     pub probe_labels: Vec<String>,
 }
 
+impl Simulated {
+    /// What `simulate --json` prints: the settings the run used and what it wrote (`model`:
+    /// `dnurbs` or `msm`).
+    pub fn summary_json(&self, model: &str, summary: &RunSummary, out: &Path) -> serde_json::Value {
+        let mut v = serde_json::json!({
+            "model": model,
+            "integrator": self.integrator.name(),
+            "substeps": self.substeps,
+            "dt": self.dt,
+            "t_end": self.t_end,
+            "steps": summary.steps,
+            "t_final": summary.t_final,
+            "halved_steps": summary.halved_steps,
+            "samples": self.trajectory.t.len(),
+            "frames": self.frames.len(),
+            "pvd": self.pvd,
+            "vtk_every": self.vtk_every,
+            "warnings": self.warnings,
+            "out": out.display().to_string(),
+        });
+        if let (Some(s), serde_json::Value::Object(map)) = (self.stability, &mut v) {
+            map.insert("omega_max".into(), serde_json::json!(s.omega_max));
+            map.insert("dt_critical".into(), serde_json::json!(s.dt_critical));
+        }
+        v
+    }
+
+    /// The result line of `simulate` (`model`: `D-NURBS` or `MSM`).
+    pub fn result_line(&self, model: &str, summary: &RunSummary, out: &Path) -> String {
+        format!(
+            "{model} run ({}, {} steps, {} samples, {} ParaView frames) written to {}",
+            Schedule {
+                integrator: self.integrator,
+                substeps: self.substeps
+            },
+            summary.steps,
+            self.trajectory.t.len(),
+            self.frames.len(),
+            out.display()
+        )
+    }
+}
+
 /// The label of a probe at `(u, v)` (`v` left out on a curve, `node` for an MSM's node).
 pub fn probe_label(node: Option<usize>, uv: Option<(f64, f64)>, curve: bool) -> String {
     let mut parts = Vec::new();

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 use nurbspring_scene::Method;
 use nurbspring_scene::Scene;
-use nurbspring_scene::report::{constants_text, write_derivation};
+use nurbspring_scene::report::{derivation_line, write_derivation};
 
 use crate::progress::Progress;
 use nurbspring_scene::resources::Job;
@@ -54,34 +54,7 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     if args.json {
         print_report(&out)?;
     } else {
-        let d = &derivation.derived;
-        // What was derived: an MSM, or the exact reduction (a linear model, not an MSM).
-        let what = match derivation.method() {
-            Method::Reduction => format!(
-                "exact reduction onto {} free nodes (reduction.json: a linear node-space model, not an MSM; the reference an MSM is judged against)",
-                derivation.reduction().map_or(0, |r| r.free.len())
-            ),
-            m => format!("derived MSM ({})", m.name()),
-        };
-        let mut parts = Vec::new();
-        let constants = constants_text(&d.constants, 6);
-        if !constants.is_empty() {
-            parts.push(constants);
-        }
-        parts.push(mass_text(&derivation, d.m));
-        println!(
-            "{what}: {}; dt_critical = {:.5}; central node rel. RMS = {} over {:.3} s ({}), second excitation {:.4}",
-            parts.join(", "),
-            d.dt_critical,
-            if d.validation.relative_rms.is_nan() {
-                "n/a".to_string()
-            } else {
-                format!("{:.4}", d.validation.relative_rms)
-            },
-            d.validation.horizon,
-            d.validation.integrator,
-            derivation.second_excitation.relative_rms
-        );
+        println!("{}", derivation_line(&derivation));
         println!("Outputs in {}", out.display());
     }
     if let (Some(why), true) = (choice.fallback, ctx.verbose()) {
@@ -91,38 +64,4 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
         eprintln!("warning: {w}");
     }
     Ok(())
-}
-
-/// The node masses of a derivation's result: one `m` when every free node has it, else their
-/// range and mean (the linear derivations fit one mass per node); the reduction's total.
-fn mass_text(derivation: &nurbspring_scene::Derivation, m: f64) -> String {
-    let free: Vec<f64> = match derivation.lattice() {
-        Some(l) => l
-            .masses
-            .iter()
-            .zip(&l.fixed)
-            .filter(|(_, f)| !**f)
-            .map(|(m, _)| *m)
-            .collect(),
-        None => {
-            return format!(
-                "free mass {:.6} (M_T, against the D-NURBS's {:.6})",
-                derivation.mass.free_msm, derivation.mass.free_dnurbs
-            );
-        }
-    };
-    let (lo, hi) = free
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
-    if free.is_empty() || lo == hi {
-        format!("m = {m:.6}")
-    } else {
-        format!(
-            "node masses {lo:.6} to {hi:.6} (mean {:.6} over {} free nodes)",
-            free.iter().sum::<f64>() / free.len() as f64,
-            free.len()
-        )
-    }
 }
