@@ -6,8 +6,8 @@ use nurbspring_msm::{Class, FixedNodes, LinearKind};
 use serde::Serialize;
 
 use crate::DeriveError;
+use crate::dispatch::derive;
 use crate::method::Method;
-use crate::method::derive;
 use crate::outcome::Derivation;
 use crate::setup::Config;
 use crate::validation::compare_points;

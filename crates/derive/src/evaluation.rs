@@ -971,7 +971,7 @@ mod tests {
             ..MassReport::default()
         };
         let truncated = |left_out| {
-            Some(crate::outcome::ModalTruncation {
+            Some(crate::validation::ModalTruncation {
                 modes: 200,
                 unknowns: 3721,
                 left_out,

@@ -13,6 +13,7 @@ use nurbspring_linalg::{
     largest_generalized_eigenvalue,
 };
 use nurbspring_msm::{Class, Constants};
+use nurbspring_sim::StabilityLimit;
 
 use crate::DeriveError;
 use crate::evaluation::DnurbsModes;
@@ -239,8 +240,9 @@ pub fn excitation_fit(
         &vec![1.0; units.len()],
         n,
     )?;
-    let dt_modal = 2.0 / highest_frequency(&l_modal, &modal.masses)?;
-    let dt_here = 2.0 / highest_frequency(&l, &masses)?;
+    let dt_modal =
+        StabilityLimit::from_omega_max(highest_frequency(&l_modal, &modal.masses)?).dt_critical;
+    let dt_here = StabilityLimit::from_omega_max(highest_frequency(&l, &masses)?).dt_critical;
     let refined: Vec<Class> = active.iter().map(|&c| classes[c]).collect();
     let warnings = overfit_warnings(
         &refined,

@@ -35,6 +35,7 @@
 //! ```
 
 pub mod beyond;
+mod dispatch;
 mod error;
 mod evaluation;
 mod excitation;
@@ -58,6 +59,7 @@ mod setup;
 mod test_scenes;
 mod validation;
 
+pub use dispatch::derive;
 pub use error::{DeriveError, Input, ScalarObstacle};
 pub use evaluation::{
     DnurbsModes, LINEAR_RANGE, MATCH_WINDOW, PERIODS, REGIME_FREQUENCY, REGIME_MODES, TABLE_MODES,
@@ -65,7 +67,7 @@ pub use evaluation::{
 };
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use mass::{distinct_non_null, mass_eigenvalues};
-pub use method::{ElementClasses, LinearMethod, Method, derive};
+pub use method::{ElementClasses, LinearMethod, Method};
 pub use modal::{
     Band, CONSTANT_REGULARIZATION, ElementPrior, FITTED_MODES, FREQUENCY_WEIGHT, FitGroup,
     GroupFit, MASS_FLOOR, MASS_REGULARIZATION, MIN_HALF_WAVES, ModalFitReport, ModalSolution,
@@ -76,8 +78,8 @@ pub use modal_solution::{DENSE_MODES, ModalBasis, TRUNCATED_MODES};
 pub use omega::{NodeState, Omega};
 pub use outcome::{
     Derivation, DerivedModel, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate,
-    MassReport, ModalTruncation, NodeReduction, ParameterSet, ProbeError, ReductionReport, Regime,
-    Spectrum, TrustRegionReport, Validation,
+    MassReport, NodeReduction, ParameterSet, ProbeError, ReductionReport, Regime, Spectrum,
+    TrustRegionReport, Validation,
 };
 pub use pipeline::{
     Judge, SelectedReading, derive_msm, evaluate, fit_step, mass_step, msm_spectrum, reference_run,
@@ -90,6 +92,6 @@ pub use setup::{
     Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Setup, TimeSettings,
 };
 pub use validation::{
-    Comparison, REPEATED_FREQUENCY, Trajectory, compare, compare_points, dominant_period, mac,
-    match_modes,
+    Comparison, ModalTruncation, REPEATED_FREQUENCY, Trajectory, compare, compare_points,
+    dominant_period, mac, match_modes,
 };

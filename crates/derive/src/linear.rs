@@ -6,8 +6,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use nurbspring_dnurbs::Integration;
+use nurbspring_geom::{area_element, line_element};
 use nurbspring_linalg::{DenseMatrix, LuSolver, SparseMatrix, SpdSolver, symmetric_eigen};
-use nurbspring_msm::{Class, Constants, SpringLattice};
+use nurbspring_msm::{Class, Constants, SpringLattice, dual_spacing};
+use nurbspring_sim::StabilityLimit;
 
 use crate::error::{DeriveError, Input};
 use crate::evaluation::{
@@ -50,17 +52,9 @@ fn area_factors(setup: &Setup, config: &Config) -> Result<Vec<f64>, DeriveError>
             Ok(match setup.model().geometry() {
                 nurbspring_dnurbs::Geometry::Surface(s) => {
                     let d = s.derivatives(u, v, 1)?;
-                    let c = [
-                        d.u[1] * d.v[2] - d.u[2] * d.v[1],
-                        d.u[2] * d.v[0] - d.u[0] * d.v[2],
-                        d.u[0] * d.v[1] - d.u[1] * d.v[0],
-                    ];
-                    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+                    area_element(d.u, d.v)
                 }
-                nurbspring_dnurbs::Geometry::Curve(c) => {
-                    let d = c.derivatives(u, 1)?.u;
-                    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-                }
+                nurbspring_dnurbs::Geometry::Curve(c) => line_element(c.derivatives(u, 1)?.u),
             })
         })
         .collect()
@@ -75,19 +69,9 @@ fn dual_cell_masses(setup: &Setup, config: &Config, area: &[f64]) -> Result<Vec<
         .params
         .as_ref()
         .ok_or(DeriveError::LatticeWithoutParameters)?;
-    let dual = |t: &[f64]| -> Vec<f64> {
-        let n = t.len();
-        (0..n)
-            .map(|a| {
-                let left = if a > 0 { t[a] - t[a - 1] } else { 0.0 };
-                let right = if a + 1 < n { t[a + 1] - t[a] } else { 0.0 };
-                if n == 1 { 1.0 } else { 0.5 * (left + right) }
-            })
-            .collect()
-    };
     let us: Vec<f64> = (0..n_u).map(|i| params[i * n_v].0).collect();
     let vs: Vec<f64> = (0..n_v).map(|j| params[j].1).collect();
-    let (tu, tv) = (dual(&us), dual(&vs));
+    let (tu, tv) = (dual_spacing(&us), dual_spacing(&vs));
     let mut out = Vec::with_capacity(lattice.n_nodes());
     for i in 0..n_u {
         for j in 0..n_v {
@@ -614,6 +598,7 @@ pub(crate) fn derive_linear(
         fixed,
     );
     let omega_max = node.basis.omega_max()?;
+    let limit = StabilityLimit::from_omega_max(omega_max);
     let derived = ParameterSet {
         constants: match &model {
             DerivedModel::Lattice(l) => class_means(l),
@@ -621,12 +606,8 @@ pub(crate) fn derive_linear(
         },
         m: mean,
         omega_max,
-        dt_critical: if omega_max > 0.0 {
-            2.0 / omega_max
-        } else {
-            f64::INFINITY
-        },
-        dt_exceeds_explicit_limit: omega_max > 0.0 && config.time.dt >= 2.0 / omega_max,
+        dt_critical: limit.dt_critical,
+        dt_exceeds_explicit_limit: config.time.dt >= limit.dt_critical,
         relative_residual_all_dofs: None,
         relative_residual_free_dofs: None,
         validation: validation_main,

@@ -1,16 +1,9 @@
-//! The derivations ([`Method`]) and the one place that runs each: [`derive`]. A method knows
+//! The derivations ([`Method`]; [`crate::derive`] runs each). A method knows
 //! its default lattice grid and the element classes its lattice is built of; the linear
 //! derivations have their own type ([`LinearMethod`]), so that the paper's cannot reach them.
 
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
-
 use nurbspring_msm::ParameterGrid;
 use serde::{Deserialize, Serialize};
-
-use crate::outcome::Derivation;
-use crate::setup::{Config, Setup};
-use crate::{DeriveError, linear, pipeline};
 
 /// Which derivation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -123,20 +116,5 @@ impl LinearMethod {
     /// modes (modal, excitation); false for the exact reduction.
     pub fn is_fitted(self) -> bool {
         self != LinearMethod::Reduction
-    }
-}
-
-/// Runs the derivation `config.method`: the one place that chooses between them. `cancel`
-/// stops between steps; `progress(done, total)` follows the paper's mass scan.
-pub fn derive(
-    config: &Config,
-    cancel: Option<Arc<AtomicBool>>,
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<(Derivation, Setup), DeriveError> {
-    match config.method {
-        Method::Paper => pipeline::derive_msm(config, cancel, progress),
-        Method::Modal => linear::derive_linear(config, LinearMethod::Modal, cancel),
-        Method::Excitation => linear::derive_linear(config, LinearMethod::Excitation, cancel),
-        Method::Reduction => linear::derive_linear(config, LinearMethod::Reduction, cancel),
     }
 }

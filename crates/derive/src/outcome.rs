@@ -12,6 +12,7 @@ use crate::fit::FitResult;
 use crate::method::Method;
 use crate::modal::ModalFitReport;
 use crate::reference::ReferenceKind;
+use crate::validation::ModalTruncation;
 
 /// One mass candidate of the paper's scan.
 #[derive(Clone, Debug, Serialize)]
@@ -127,20 +128,6 @@ pub struct Validation {
     pub msm_truncation: Option<ModalTruncation>,
     /// Every probe.
     pub probes: Vec<ProbeError>,
-}
-
-/// A modal run on the lowest modes of a large system (docs/math.md §8.6).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ModalTruncation {
-    /// Modes followed.
-    pub modes: usize,
-    /// Modes of the system (its unknowns).
-    pub unknowns: usize,
-    /// The share of the motion in the modes left out: the time-RMS M-norm of their
-    /// oscillation over that of every mode's ([`crate::ModalBasis::left_out`]); absent when
-    /// it cannot be computed (rigid modes).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub left_out: Option<f64>,
 }
 
 /// Stability, residuals and validation of a derived (or given) parameter set.

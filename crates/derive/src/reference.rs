@@ -9,8 +9,8 @@ use nurbspring_sim::{
 use serde::Serialize;
 
 use crate::modal_solution::ModalBasis;
-use crate::outcome::ModalTruncation;
 use crate::scalar::ScalarSystem;
+use crate::validation::ModalTruncation;
 use crate::{DeriveError, Trajectory};
 
 /// Largest number of samples of a validation run.

@@ -11,7 +11,9 @@
 //! 1-D Gram matrices, anything else the Gauss-point kernel. With weights as unknowns the
 //! kernels fill full `4N × 4N` blocks through the Jacobian with weight columns.
 
-use nurbspring_geom::{BSplineBasis, BasisScratch, Jacobian, LocalRationalBasis};
+use nurbspring_geom::{
+    BSplineBasis, BasisScratch, Jacobian, LocalRationalBasis, area_element, line_element,
+};
 use nurbspring_linalg::{KroneckerPattern, SparseMatrix};
 use rayon::prelude::*;
 
@@ -315,14 +317,9 @@ fn area_factor(geometry: &Geometry, jac: &Jacobian) -> f64 {
         }
     }
     if geometry.is_curve() {
-        (cu[0] * cu[0] + cu[1] * cu[1] + cu[2] * cu[2]).sqrt()
+        line_element(cu)
     } else {
-        let n = [
-            cu[1] * cv[2] - cu[2] * cv[1],
-            cu[2] * cv[0] - cu[0] * cv[2],
-            cu[0] * cv[1] - cu[1] * cv[0],
-        ];
-        (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+        area_element(cu, cv)
     }
 }
 

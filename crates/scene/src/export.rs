@@ -583,29 +583,6 @@ pub fn write_steady(
     Ok(())
 }
 
-/// `load_path.csv`: the load factor λ and each probe's displacement at every recorded level of
-/// a steady state's path, columns `lambda, probe<k>_dx[u=…;v=…], …_dy, …_dz`.
-pub fn write_load_path(out: &Path, steady: &crate::run::Steady) -> Result<(), Error> {
-    let mut header = vec!["lambda".to_string()];
-    for (k, probe) in steady.probes.iter().enumerate() {
-        for c in ["dx", "dy", "dz"] {
-            header.push(format!(
-                "probe{k}_{c}[u={};v={}]",
-                nurbspring_io::output::format_f64(probe.u),
-                nurbspring_io::output::format_f64(probe.v)
-            ));
-        }
-    }
-    let header: Vec<&str> = header.iter().map(String::as_str).collect();
-    let rows = steady.path.iter().map(|level| {
-        std::iter::once(level.lambda)
-            .chain(level.displacements.iter().flat_map(|d| d.iter().copied()))
-            .collect::<Vec<f64>>()
-    });
-    write_csv(out.join("load_path.csv"), &header, rows)?;
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -51,6 +51,7 @@ mod scene;
 mod scene_error;
 pub mod spec;
 pub mod summary;
+mod text_file;
 mod validate;
 
 pub use build::{MsmOverrides, spring_constants};

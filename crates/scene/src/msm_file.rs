@@ -11,7 +11,7 @@ use nurbspring_sim::{IntegratorKind, State};
 
 use crate::build::MsmOverrides;
 use crate::resources::{Job, Limits, Timing, format_bytes};
-use crate::scene::read_text;
+use crate::text_file::read_text;
 use crate::{Error, Scene};
 
 /// Largest `msm.json` read (256 MiB: a lattice of a few million nodes).
