@@ -5,7 +5,7 @@
 
 use nurbspring_dnurbs::DnurbsModel;
 use nurbspring_linalg::SparseMatrix;
-use nurbspring_sim::{DynamicModel, State};
+use nurbspring_sim::{DynamicModel, PointDofs, State};
 
 use crate::error::{DeriveError, ScalarObstacle};
 
@@ -99,8 +99,8 @@ impl ScalarSystem {
         if free.is_empty() {
             return Err(refuse(ScalarObstacle::NoFreeControlPoint));
         }
-        // With fixed points only, the free dofs are 3k, 3k+1, 3k+2 of the free points.
-        let x_rows: Vec<usize> = (0..free.len()).map(|i| 3 * i).collect();
+        // With fixed points only, the free dofs are the x, y, z of the free points.
+        let x_rows = PointDofs::XYZ.scalar_rows(free.len());
         let mass = model.reduced_mass().submatrix(&x_rows, &x_rows);
         let stiffness = model.reduced_stiffness().submatrix(&x_rows, &x_rows);
         let q0 = model.reduced_coordinates(model.p0());

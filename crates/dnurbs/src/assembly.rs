@@ -15,6 +15,7 @@ use nurbspring_geom::{
     BSplineBasis, BasisScratch, Jacobian, LocalRationalBasis, area_element, line_element,
 };
 use nurbspring_linalg::{KroneckerPattern, SparseMatrix};
+use nurbspring_sim::PointDofs;
 use rayon::prelude::*;
 
 use crate::layout::{
@@ -203,7 +204,7 @@ impl Assembler {
                 add_point_loads(geometry, loads, false, &mut force)?;
                 let points = self.options.quadrature_points.unwrap_or(1);
                 crate::edge::EdgeLoads::new(geometry, &loads.edges, points)?.add_forces(&mut force);
-                let unit = s.unit_mass.kron_identity(3);
+                let unit = PointDofs::XYZ.expand(&s.unit_mass);
                 let mut mass = unit.clone();
                 mass.scale(material.mu);
                 let mut damping = unit;
@@ -211,7 +212,7 @@ impl Assembler {
                 Ok(Matrices {
                     mass,
                     damping,
-                    stiffness: s.stiffness.kron_identity(3),
+                    stiffness: PointDofs::XYZ.expand(&s.stiffness),
                     force,
                     dofs_per_point: 3,
                 })

@@ -3,7 +3,7 @@
 
 use nurbspring_geom::{KnotVector, NurbsCurve, NurbsSurface};
 use nurbspring_linalg::SparseMatrix;
-use nurbspring_sim::representable;
+use nurbspring_sim::{PointDofs, representable};
 
 use crate::element::grid_elements;
 use crate::hinge::angle;
@@ -781,7 +781,7 @@ impl SpringLattice {
         if self.elements.is_empty() {
             return k;
         }
-        let l = self.linear_matrix(None).kron_identity(3);
+        let l = PointDofs::XYZ.expand(&self.linear_matrix(None));
         SparseMatrix::linear_combination(1.0, &k, 1.0, &l).expect("both are 3N × 3N")
     }
 
@@ -805,7 +805,7 @@ impl SpringLattice {
     /// ```
     pub fn unit_stiffness(&self, class: Class, x: &[f64]) -> SparseMatrix {
         if let Class::Linear(..) = class {
-            return self.linear_matrix(Some(class)).kron_identity(3);
+            return PointDofs::XYZ.expand(&self.linear_matrix(Some(class)));
         }
         assert_eq!(
             x.len(),

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use nurbspring_linalg::largest_generalized_eigenvalue;
 
 use crate::integrators::make_stepper_with_options;
-use crate::{DynamicModel, SimError};
+use crate::{DynamicModel, PointDofs, SimError};
 
 /// Largest number of steps one run may take (10⁸): larger requests are refused up front.
 pub const MAX_STEPS: f64 = 1e8;
@@ -338,7 +338,8 @@ pub fn uniform_stability_limit(
     // A bound and a mass of the form S ⊗ I₃ (a lattice's per-node masses and isotropic
     // blocks) have the eigenvalues of their factors: the pencil of the factors is a third the
     // size.
-    let lambda = match (k.kron_identity_factor(3), m.kron_identity_factor(3)) {
+    let xyz = PointDofs::XYZ;
+    let lambda = match (xyz.scalar_factor(&k), xyz.scalar_factor(&m)) {
         (Some(k3), Some(m3)) => largest_generalized_eigenvalue(&k3, &m3, 1e-8)?,
         _ => largest_generalized_eigenvalue(&k, &m, 1e-8)?,
     }
