@@ -14,7 +14,7 @@ use crate::SimError;
 /// use nurbspring_sim::{PointDofs, SparseMatrix};
 /// let s = SparseMatrix::from_triplets(2, 2, &[(0, 0, 2.0), (0, 1, -1.0), (1, 1, 3.0)]).unwrap();
 /// let full = PointDofs::XYZ.expand(&s);
-/// assert_eq!((full.nrows(), full.get(3, 4)), (6, 3.0));
+/// assert_eq!((full.nrows(), full.get(4, 4), full.get(3, 4)), (6, 3.0, 0.0));
 /// assert_eq!(PointDofs::XYZ.dof(1, 2), 5);
 /// assert_eq!(PointDofs::XYZ.scalar_part(&full).get(0, 1), -1.0);
 /// ```
