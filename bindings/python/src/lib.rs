@@ -12,15 +12,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{RecvTimeoutError, channel};
 use std::time::Duration;
 
-use nurbspring_derive::{Derivation, Method, Trajectory};
 use nurbspring_scene::export::DofsFile;
 use nurbspring_scene::msm_file::{MsmSetup, msm_setup_from_text, read_msm_file};
 use nurbspring_scene::report::{Report, derived_msm_file};
 use nurbspring_scene::run::{
     RunRequest, Simulated, SteadyRequest, simulate_dnurbs, simulate_msm, steady_state,
 };
-use nurbspring_scene::{Error, MsmOverrides};
-use nurbspring_sim::{ErrorKind, IntegratorKind};
+use nurbspring_scene::{
+    Derivation, Error, ErrorKind, IntegratorKind, Method, MsmOverrides, Trajectory,
+};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -156,7 +156,7 @@ fn integrator(name: Option<&str>) -> PyResult<Option<IntegratorKind>> {
                 s,
                 format!(
                     "unknown integrator; expected one of {}",
-                    nurbspring_dnurbs::integrator_names(&IntegratorKind::ALL)
+                    nurbspring_scene::integrator_names(&IntegratorKind::ALL)
                 ),
             )
         })
@@ -265,7 +265,7 @@ impl Scene {
         Ok(names
             .iter()
             .map(|&name| {
-                let pick = |x: &nurbspring_geom::SurfaceDerivatives| match name {
+                let pick = |x: &nurbspring_scene::SurfaceDerivatives| match name {
                     "point" => x.point,
                     "u" => x.u,
                     "v" => x.v,
@@ -301,7 +301,7 @@ impl Scene {
         Ok(names
             .iter()
             .map(|&name| {
-                let pick = |x: &nurbspring_geom::CurveDerivatives| match name {
+                let pick = |x: &nurbspring_scene::CurveDerivatives| match name {
                     "point" => x.point,
                     "u" => x.u,
                     _ => x.uu,
@@ -315,7 +315,7 @@ impl Scene {
 /// CSC of `a` transposed, that is CSR of `a`: `(nrows, ncols, indptr, indices, data)`.
 fn csr<'py>(
     py: Python<'py>,
-    a: &nurbspring_linalg::SparseMatrix,
+    a: &nurbspring_scene::SparseMatrix,
 ) -> Bound<'py, pyo3::types::PyTuple> {
     let t = a.transpose();
     pyo3::types::PyTuple::new(
@@ -605,7 +605,7 @@ fn derivation_dict<'py>(
     label: &str,
     scene: &nurbspring_scene::Scene,
     d: &Derivation,
-    paper: Option<&nurbspring_derive::paper::PaperReport>,
+    paper: Option<&nurbspring_scene::PaperReport>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
     out.set_item("report", json_text(&Report::new(label, scene, d, paper))?)?;
@@ -629,41 +629,27 @@ fn derive<'py>(
     progress: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let scene = &scene.inner;
-    let method = match derivation {
-        Some(s) => Method::parse(s).ok_or_else(|| {
-            bad_argument(
-                "derivation",
-                s,
-                format!(
-                    "unknown derivation; expected one of {}",
-                    Method::ALL.map(Method::name).join(", ")
-                ),
-            )
-        })?,
-        None => scene.derivation().0,
-    };
-    if method == Method::Springs {
+    let requested = derivation
+        .map(|s| {
+            Method::parse(s).ok_or_else(|| {
+                bad_argument(
+                    "derivation",
+                    s,
+                    format!(
+                        "unknown derivation; expected one of {}",
+                        Method::ALL.map(Method::name).join(", ")
+                    ),
+                )
+            })
+        })
+        .transpose()?;
+    let choice = scene.choose_derivation(requested.map(|m| (m, "derivation")));
+    if choice.method == Method::Springs {
         return derive_springs(py, scene);
     }
-    let key = if derivation.is_some() {
-        "derivation"
-    } else {
-        "fit.derivation"
-    };
     let derived = run_blocking(py, |cancel| -> Result<Derivation, Error> {
-        let config = scene.derivation_config(Some(method))?;
         let mut bar = progress_printer(progress, "mass scan");
-        let result = match config.method {
-            Method::Paper => nurbspring_derive::derive_msm(&config, Some(cancel), &mut bar),
-            _ => nurbspring_derive::derive_linear(&config, Some(cancel)),
-        };
-        let (derivation, _) = result.map_err(|e| {
-            // An option error names its own key; other input errors are the derivation's.
-            let named = matches!(e, nurbspring_derive::DeriveError::InvalidOption { .. });
-            let input = e.kind() == ErrorKind::Input;
-            Error::model(&scene.path, (input && !named).then_some(key), e)
-        })?;
-        Ok(derivation)
+        Ok(scene.derive(choice, Some(cancel), &mut bar)?.0)
     })?
     .map_err(py_err)?;
     let label = scene.path.display().to_string();
@@ -697,15 +683,13 @@ fn derive_springs<'py>(
 fn paper(py: Python<'_>, progress: bool) -> PyResult<Bound<'_, PyDict>> {
     let scene = nurbspring_scene::Scene::paper().map_err(|e| py_err(e.into()))?;
     let (derivation, report) = run_blocking(py, |cancel| {
-        let config = scene.derivation_config(Some(Method::Paper))?;
         let mut bar = progress_printer(progress, "mass scan");
-        nurbspring_derive::paper::reproduce_cancellable(&config, Some(cancel), &mut bar)
-            .map_err(|e| Error::model(&scene.path, None, e))
+        scene.reproduce_paper(Some(cancel), &mut bar)
     })?
     .map_err(py_err)?;
     derivation_dict(
         py,
-        "built-in paper scene (examples/paper.toml)",
+        nurbspring_scene::paper::PAPER_LABEL,
         &scene,
         &derivation,
         Some(&report),

@@ -2,7 +2,7 @@
 //! flag), 1 a failure during a run, 130 interrupted.
 
 use nurbspring_scene::Error;
-use nurbspring_sim::ErrorKind;
+use nurbspring_scene::ErrorKind;
 
 /// Bad input.
 pub const INPUT: u8 = 2;

@@ -14,8 +14,8 @@ use std::sync::atomic::AtomicBool;
 
 use clap::{Args, Parser, Subcommand};
 use nurbspring_io::folder::StagedDir;
-use nurbspring_scene::msm_file::{MsmSetup, is_msm_file, load_msm};
-use nurbspring_scene::resources::{Estimate, Job, Limits, Timing};
+use nurbspring_scene::msm_file::{MsmSetup, load_msm_within};
+use nurbspring_scene::resources::{Estimate, Job, Limits, Timing, parse_size};
 use nurbspring_scene::{Error, Scene};
 
 /// What `nurbspring --help` says after the one-line summary.
@@ -72,32 +72,6 @@ pub struct GlobalArgs {
     max_output: Option<u64>,
 }
 
-/// A byte count: digits with an optional unit K, M, G or T (powers of 1024; `B`, `iB` allowed).
-fn parse_size(s: &str) -> Result<u64, String> {
-    let t = s.trim();
-    let upper = t.to_ascii_uppercase();
-    let body = upper
-        .strip_suffix("IB")
-        .or_else(|| upper.strip_suffix('B'))
-        .unwrap_or(&upper);
-    let (digits, shift) = match body.chars().last() {
-        Some('K') => (&body[..body.len() - 1], 10),
-        Some('M') => (&body[..body.len() - 1], 20),
-        Some('G') => (&body[..body.len() - 1], 30),
-        Some('T') => (&body[..body.len() - 1], 40),
-        _ => (body, 0),
-    };
-    let x: f64 = digits
-        .trim()
-        .parse()
-        .map_err(|_| format!("{t:?} is not a size (bytes, or a number with K, M, G or T)"))?;
-    let bytes = x * (1u64 << shift) as f64;
-    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(format!("{t:?} is not a size between 1 byte and 16 EiB"));
-    }
-    Ok(bytes as u64)
-}
-
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the paper's experiment (built-in scene) and print the reproduction table.
@@ -151,8 +125,8 @@ impl Context {
         scene.check_resources(job, &self.limits, out)
     }
 
-    /// The MSM of an msm.json file or of a scene (see [`load_msm`]), a scene's checked against
-    /// the limits first (`run`: the output folder and the flags' timing of a simulation).
+    /// The MSM of an msm.json file or of a scene, checked against the limits first (see
+    /// [`load_msm_within`]; `run`: the output folder and the flags' timing of a simulation).
     pub fn load_msm(
         &self,
         path: &Path,
@@ -160,31 +134,7 @@ impl Context {
         flag: &dyn Fn(&str) -> String,
         run: Option<(&Path, Timing)>,
     ) -> Result<MsmSetup, Error> {
-        if is_msm_file(path) {
-            // The model of an msm.json is built from the parsed file: its peak is proportional
-            // to the file's size (31 bytes a byte measured on a 10⁶-node chain; 40 allowed).
-            if let Ok(meta) = std::fs::metadata(path) {
-                let need = (64u64 << 20).saturating_add(meta.len().saturating_mul(40));
-                if need > self.limits.memory {
-                    return Err(Error::Resources {
-                        path: path.to_path_buf(),
-                        key: "(file size)".to_string(),
-                        message: format!(
-                            "a model of {} of msm.json needs an estimated {} of memory, above the limit of {} (raise it with --max-memory)",
-                            nurbspring_scene::resources::format_bytes(meta.len()),
-                            nurbspring_scene::resources::format_bytes(need),
-                            nurbspring_scene::resources::format_bytes(self.limits.memory)
-                        ),
-                    });
-                }
-            }
-            return load_msm(path, overrides, flag);
-        }
-        overrides.validate(flag)?;
-        let scene = Scene::from_path(path)?;
-        let (out, timing) = run.map_or((None, Timing::default()), |(o, t)| (Some(o), t));
-        self.check_resources(&scene, Job::SimulateMsm(timing), out)?;
-        scene.msm_setup(overrides)
+        load_msm_within(path, overrides, flag, &self.limits, run)
     }
 
     /// True unless `--quiet`.

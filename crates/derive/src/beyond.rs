@@ -2,13 +2,15 @@
 //! side by side with the paper's, both judged against the exact D-NURBS motion over the
 //! paper's 4 s and over 40 s.
 
-use nurbspring_msm::{Class, FixedNodes, LinearKind, ParameterGrid};
+use nurbspring_msm::{Class, FixedNodes, LinearKind};
 use serde::Serialize;
 
+use crate::DeriveError;
+use crate::dispatch::derive;
+use crate::method::Method;
 use crate::outcome::Derivation;
-use crate::setup::{Config, Method};
+use crate::setup::Config;
 use crate::validation::compare_points;
-use crate::{DeriveError, derive_linear};
 
 /// The horizons compared [s].
 pub const HORIZONS: [f64; 2] = [4.0, 40.0];
@@ -60,8 +62,7 @@ fn windows(d: &Derivation) -> Vec<(f64, f64)> {
 
 fn row(d: &Derivation) -> BeyondRow {
     let lattice = d
-        .lattice
-        .as_ref()
+        .lattice()
         .map(|l| {
             let (u, v) = l.grid.unwrap_or((l.n_nodes(), 1));
             format!(
@@ -71,7 +72,7 @@ fn row(d: &Derivation) -> BeyondRow {
         })
         .unwrap_or_default();
     BeyondRow {
-        derivation: d.method,
+        derivation: d.method(),
         lattice,
         free_mass: (d.mass.free_msm, d.mass.free_dnurbs),
         omega1: (
@@ -87,7 +88,7 @@ fn row(d: &Derivation) -> BeyondRow {
 pub fn beyond(base: &Config, paper: &Derivation) -> Result<Beyond, DeriveError> {
     let mut config = base.clone();
     config.method = Method::Modal;
-    config.lattice.grid = ParameterGrid::Greville;
+    config.lattice.grid = Method::Modal.default_grid();
     config.lattice.fixed = FixedNodes::Auto;
     config.lattice.constants = nurbspring_msm::Constants::from_pairs(
         Class::linear(&LinearKind::ALL)
@@ -95,7 +96,7 @@ pub fn beyond(base: &Config, paper: &Derivation) -> Result<Beyond, DeriveError> 
             .map(|c| (c, 1.0)),
     );
     config.given = None;
-    let (modal, _) = derive_linear(&config, None)?;
+    let (modal, _) = derive(&config, None, &mut |_, _| {})?;
     Ok(Beyond {
         rows: vec![row(paper), row(&modal)],
     })

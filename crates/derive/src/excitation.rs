@@ -13,6 +13,7 @@ use nurbspring_linalg::{
     largest_generalized_eigenvalue,
 };
 use nurbspring_msm::{Class, Constants};
+use nurbspring_sim::StabilityLimit;
 
 use crate::DeriveError;
 use crate::evaluation::DnurbsModes;
@@ -110,11 +111,7 @@ pub fn excitation_fit(
     }
     let total: f64 = amplitude.iter().map(|a| a.1).sum();
     if total.is_nan() || total <= 0.0 {
-        return Err(DeriveError::InvalidOption {
-            name: "initial.velocity",
-            value: "0 everywhere, and no displacement or load".into(),
-            reason: "the excitation derivation weights the modes the scene's initial velocity and loads excite, and this scene excites none (give initial.velocity, initial.displacement or loads)".into(),
-        });
+        return Err(DeriveError::NoExcitation);
     }
     amplitude.sort_by(|a, b| b.1.total_cmp(&a.1));
     amplitude.truncate(EXCITED_MODES);
@@ -243,8 +240,9 @@ pub fn excitation_fit(
         &vec![1.0; units.len()],
         n,
     )?;
-    let dt_modal = 2.0 / highest_frequency(&l_modal, &modal.masses)?;
-    let dt_here = 2.0 / highest_frequency(&l, &masses)?;
+    let dt_modal =
+        StabilityLimit::from_omega_max(highest_frequency(&l_modal, &modal.masses)?).dt_critical;
+    let dt_here = StabilityLimit::from_omega_max(highest_frequency(&l, &masses)?).dt_critical;
     let refined: Vec<Class> = active.iter().map(|&c| classes[c]).collect();
     let warnings = overfit_warnings(
         &refined,

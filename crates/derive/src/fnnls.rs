@@ -13,7 +13,7 @@
 
 use nurbspring_linalg::{DenseMatrix, cholesky_solve_dense, solve_dense};
 
-use crate::DeriveError;
+use crate::error::{DeriveError, Input};
 
 /// The quadratic `½ zᵀ H z − gᵀ z` with `H` as above (all blocks already scaled).
 pub(crate) struct BlockQp {
@@ -158,8 +158,8 @@ impl BlockQp {
             loop {
                 iterations += 1;
                 if iterations > max_iterations {
-                    return Err(DeriveError::InvalidOption {
-                        name: "modal fit",
+                    return Err(DeriveError::InvalidInput {
+                        input: Input::ModalFit,
                         value: format!("{iterations} iterations"),
                         reason: "the non-negative least-squares iteration did not settle".into(),
                     });

@@ -9,7 +9,9 @@
 //!   Frobenius inner products of sparse matrices, with `k ≥ 0` by NNLS, and by the
 //!   trust-region method the paper used;
 //! - [`mass_eigenvalues`]: the candidate node masses (the non-null eigenvalues of M);
-//! - [`derive_msm`]: the pipeline of named steps ([`fit_step`] → [`reference_run`] →
+//! - [`derive`]: runs the derivation a [`Config`] names ([`Method`]), the one place that
+//!   chooses between them;
+//! - [`derive_msm`]: the paper's pipeline of named steps ([`fit_step`] → [`reference_run`] →
 //!   [`mass_step`] → [`evaluate`] → [`spectra`]) over a [`Setup`] built once from a
 //!   [`Config`];
 //! - [`record`]: one runner for both models, recording probe points and energies;
@@ -33,6 +35,7 @@
 //! ```
 
 pub mod beyond;
+mod dispatch;
 mod error;
 mod evaluation;
 mod excitation;
@@ -40,6 +43,7 @@ mod fit;
 mod fnnls;
 mod linear;
 mod mass;
+mod method;
 mod modal;
 mod modal_solution;
 mod nodes;
@@ -57,14 +61,15 @@ mod springs_check;
 mod test_scenes;
 mod validation;
 
-pub use error::DeriveError;
+pub use dispatch::derive;
+pub use error::{DeriveError, Input, ScalarObstacle};
 pub use evaluation::{
     DnurbsModes, LINEAR_RANGE, MATCH_WINDOW, PERIODS, REGIME_FREQUENCY, REGIME_MODES, TABLE_MODES,
     WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_MODE_FREQUENCY, WARN_RELATIVE_RMS, horizon,
 };
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
-pub use linear::derive_linear;
 pub use mass::{distinct_non_null, mass_eigenvalues};
+pub use method::{ElementClasses, LinearMethod, Method};
 pub use modal::{
     Band, CONSTANT_REGULARIZATION, ElementPrior, FITTED_MODES, FREQUENCY_WEIGHT, FitGroup,
     GroupFit, MASS_FLOOR, MASS_REGULARIZATION, MIN_HALF_WAVES, ModalFitReport, ModalSolution,
@@ -74,8 +79,8 @@ pub use modal::{
 pub use modal_solution::{DENSE_MODES, ModalBasis, TRUNCATED_MODES};
 pub use omega::{NodeState, Omega};
 pub use outcome::{
-    Derivation, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport,
-    ModalTruncation, NodeReduction, ParameterSet, ProbeError, ReductionReport, Regime, Spectrum,
+    Derivation, DerivedModel, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate,
+    MassReport, NodeReduction, ParameterSet, ProbeError, ReductionReport, Regime, Spectrum,
     TrustRegionReport, Validation,
 };
 pub use pipeline::{
@@ -86,7 +91,7 @@ pub use reference::ReferenceKind;
 pub use runner::{Recording, Watched, record, record_noted};
 pub use scalar::{EnergyOrigin, ScalarSystem};
 pub use setup::{
-    Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Method, Setup, TimeSettings,
+    Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Setup, TimeSettings,
 };
 pub use springs::{
     CALIBRATION_ITERATIONS, ClassConstant, RIGID_FREQUENCY, RIGID_MODES, SPRING_CLASSES,
@@ -98,6 +103,6 @@ pub use springs_check::{
     NodeMap, SMALL_MOTION_PERIODS, STEPS_PER_PERIOD, SmallMotion, lowest_modes, static_path,
 };
 pub use validation::{
-    Comparison, REPEATED_FREQUENCY, Trajectory, compare, compare_points, dominant_period, mac,
-    match_modes,
+    Comparison, ModalTruncation, REPEATED_FREQUENCY, Trajectory, compare, compare_points,
+    dominant_period, mac, match_modes,
 };

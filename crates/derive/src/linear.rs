@@ -6,25 +6,29 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use nurbspring_dnurbs::Integration;
+use nurbspring_geom::{area_element, line_element};
 use nurbspring_linalg::{DenseMatrix, LuSolver, SparseMatrix, SpdSolver, symmetric_eigen};
-use nurbspring_msm::{Class, Constants, SpringLattice};
+use nurbspring_msm::{Class, Constants, SpringLattice, dual_spacing};
+use nurbspring_sim::StabilityLimit;
 
-use crate::DeriveError;
+use crate::error::{DeriveError, Input};
 use crate::evaluation::{
     DnurbsModes, REGIME_MODES, frequency_table, impulse, initial_speed, matched_modes, node_watch,
     regime, triplicate, unloaded, validation, warnings, with_totals,
 };
 use crate::excitation::excitation_fit;
+use crate::method::LinearMethod;
 use crate::modal::{FITTED_MODES, SampledMode, element_priors, modal_fit};
 use crate::modal_solution::ModalBasis;
 use crate::nodes::NodeMap;
 use crate::outcome::{
-    Derivation, FitDetail, MassReport, NodeReduction, ParameterSet, ReductionReport, Spectrum,
+    Derivation, DerivedModel, FitDetail, MassReport, NodeReduction, ParameterSet, ReductionReport,
+    Spectrum,
 };
 use crate::pipeline::Judge;
 use crate::reference::{run_scalar, scalar_rows};
 use crate::scalar::{EnergyOrigin, ScalarSystem};
-use crate::setup::{Config, Method, Setup};
+use crate::setup::{Config, Setup};
 
 /// A load below this fraction of the largest is no load (round-off).
 const NO_LOAD: f64 = 1e-12;
@@ -48,17 +52,9 @@ fn area_factors(setup: &Setup, config: &Config) -> Result<Vec<f64>, DeriveError>
             Ok(match setup.model().geometry() {
                 nurbspring_dnurbs::Geometry::Surface(s) => {
                     let d = s.derivatives(u, v, 1)?;
-                    let c = [
-                        d.u[1] * d.v[2] - d.u[2] * d.v[1],
-                        d.u[2] * d.v[0] - d.u[0] * d.v[2],
-                        d.u[0] * d.v[1] - d.u[1] * d.v[0],
-                    ];
-                    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+                    area_element(d.u, d.v)
                 }
-                nurbspring_dnurbs::Geometry::Curve(c) => {
-                    let d = c.derivatives(u, 1)?.u;
-                    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-                }
+                nurbspring_dnurbs::Geometry::Curve(c) => line_element(c.derivatives(u, 1)?.u),
             })
         })
         .collect()
@@ -73,19 +69,9 @@ fn dual_cell_masses(setup: &Setup, config: &Config, area: &[f64]) -> Result<Vec<
         .params
         .as_ref()
         .ok_or(DeriveError::LatticeWithoutParameters)?;
-    let dual = |t: &[f64]| -> Vec<f64> {
-        let n = t.len();
-        (0..n)
-            .map(|a| {
-                let left = if a > 0 { t[a] - t[a - 1] } else { 0.0 };
-                let right = if a + 1 < n { t[a + 1] - t[a] } else { 0.0 };
-                if n == 1 { 1.0 } else { 0.5 * (left + right) }
-            })
-            .collect()
-    };
     let us: Vec<f64> = (0..n_u).map(|i| params[i * n_v].0).collect();
     let vs: Vec<f64> = (0..n_v).map(|j| params[j].1).collect();
-    let (tu, tv) = (dual(&us), dual(&vs));
+    let (tu, tv) = (dual_spacing(&us), dual_spacing(&vs));
     let mut out = Vec::with_capacity(lattice.n_nodes());
     for i in 0..n_u {
         for j in 0..n_v {
@@ -324,16 +310,13 @@ fn reduction(
     let sys = &modes.system;
     let (nn, nc) = (map.free.len(), sys.n());
     if nn > nc {
-        return Err(DeriveError::InvalidOption {
-            name: "msm.grid",
-            value: format!("{nn} free nodes"),
-            reason: format!(
-                "the reduction needs at most as many free nodes as free control points ({nc}); use grid = \"greville\""
-            ),
+        return Err(DeriveError::TooManyNodes {
+            free_nodes: nn,
+            control_points: nc,
         });
     }
-    let solver = SpdSolver::new(&sys.stiffness).map_err(|e| DeriveError::InvalidOption {
-        name: "material",
+    let solver = SpdSolver::new(&sys.stiffness).map_err(|e| DeriveError::InvalidInput {
+        input: Input::Material,
         value: "K".into(),
         reason: format!(
             "the reduction needs a positive-definite stiffness on the free control points: {e}"
@@ -368,8 +351,8 @@ fn reduction(
             .filter(|&a| v[a].abs() > 0.1)
             .map(|a| map.free[a])
             .collect();
-        return Err(DeriveError::InvalidOption {
-            name: "msm.grid",
+        return Err(DeriveError::InvalidInput {
+            input: Input::Grid,
             value: format!("eigenvalue {l:e} of Ω K⁻¹ Ωᵀ"),
             reason: format!(
                 "the reduction is singular: the nodes {worst:?} do not determine the surface"
@@ -399,15 +382,15 @@ fn symmetric_sparse(a: &DenseMatrix) -> SparseMatrix {
     SparseMatrix::from_dense(&sym, 0.0)
 }
 
-/// Derives a linear node model of the D-NURBS by `config.method` (modal, excitation or
-/// reduction) and validates it by exact modes; `cancel` stops between steps.
-pub fn derive_linear(
+/// Derives a linear node model of the D-NURBS by `method` (modal, excitation or reduction)
+/// and validates it by exact modes; `cancel` stops between steps.
+pub(crate) fn derive_linear(
     config: &Config,
+    method: LinearMethod,
     cancel: Option<Arc<AtomicBool>>,
 ) -> Result<(Derivation, Setup), DeriveError> {
-    let method = config.method;
     let setup = Setup::new(config)?;
-    let modes = DnurbsModes::new(&setup, method.name())?;
+    let modes = DnurbsModes::new(&setup, method.method().name())?;
     let map = NodeMap::new(&setup, &modes)?;
     let area = area_factors(&setup, config)?;
     let dual = dual_cell_masses(&setup, config, &area)?;
@@ -415,9 +398,10 @@ pub fn derive_linear(
     let mut warn = Vec::new();
     // A fitted model holds the D-NURBS's static deflection (its node forces are made for it);
     // otherwise, and for the reduction, the loads are carried by `Ω_ff⁻ᵀ`.
-    let deflection = match method {
-        Method::Modal | Method::Excitation => static_deflection(&modes, &map),
-        _ => None,
+    let deflection = if method.is_fitted() {
+        static_deflection(&modes, &map)
+    } else {
+        None
     };
     let forces = if deflection.is_some() {
         Vec::new()
@@ -437,8 +421,8 @@ pub fn derive_linear(
             })
             .collect()
     };
-    let (lattice, reduction_model, fit, node, rule) = match method {
-        Method::Modal | Method::Excitation => {
+    let (model, fit, node, rule) = match method {
+        LinearMethod::Modal | LinearMethod::Excitation => {
             let priors =
                 element_priors(setup.lattice(), config.material.stiffness_by_slot(), &area);
             let candidates = sampled_modes(&modes, &map, CANDIDATE_MODES);
@@ -455,7 +439,7 @@ pub fn derive_linear(
                 e.k = k;
             }
             lattice.elements.retain(|e| e.k > 0.0);
-            let (masses, fit, basis) = if method == Method::Excitation {
+            let (masses, fit, basis) = if method == LinearMethod::Excitation {
                 let (classes, stiffness) = class_stiffness(&lattice, &map.free);
                 let e = excitation_fit(
                     &modes,
@@ -499,9 +483,9 @@ pub fn derive_linear(
                 basis,
             )?;
             let rule = "one mass per free node, fitted with the element constants to the D-NURBS modes the lattice resolves near the reference masses (row sums of M_T), then scaled so that the lowest frequency matches".to_string();
-            (Some(lattice), None, fit, node, rule)
+            (DerivedModel::Lattice(lattice), fit, node, rule)
         }
-        Method::Reduction => {
+        LinearMethod::Reduction => {
             let (k_t, m_t, f_t) = reduction(&map, &modes)?;
             let guyan = !map.is_square();
             let node = node_system(
@@ -530,16 +514,8 @@ pub fn derive_linear(
                 kind: if guyan { "guyan" } else { "exact" },
             });
             let rule = "the node-space mass matrix M_T of the reduction (its row sums are listed as node masses)".to_string();
-            (None, Some(reduction), fit, node, rule)
+            (DerivedModel::Reduction(reduction), fit, node, rule)
         }
-        Method::Paper => {
-            return Err(DeriveError::InvalidOption {
-                name: "fit.derivation",
-                value: "\"paper\"".into(),
-                reason: "the paper's derivation is not a linear one (derive_msm runs it)".into(),
-            });
-        }
-        Method::Springs => return Err(springs_elsewhere()),
     };
     if cancelled() {
         return Err(DeriveError::Cancelled);
@@ -593,9 +569,9 @@ pub fn derive_linear(
         msm: triplicate(&node.basis.omega),
     };
     // Masses: the lattice's, or the reduction's row sums of M_T on the free nodes.
-    let node_masses: Vec<f64> = match &lattice {
-        Some(l) => l.masses.clone(),
-        None => {
+    let node_masses: Vec<f64> = match &model {
+        DerivedModel::Lattice(l) => l.masses.clone(),
+        DerivedModel::Reduction(_) => {
             let mut all = dual.clone();
             let sums = {
                 let mut y = vec![0.0; map.free.len()];
@@ -622,26 +598,23 @@ pub fn derive_linear(
         fixed,
     );
     let omega_max = node.basis.omega_max()?;
+    let limit = StabilityLimit::from_omega_max(omega_max);
     let derived = ParameterSet {
-        constants: lattice
-            .as_ref()
-            .map(class_means)
-            .unwrap_or_else(Constants::new),
+        constants: match &model {
+            DerivedModel::Lattice(l) => class_means(l),
+            DerivedModel::Reduction(_) => Constants::new(),
+        },
         m: mean,
         omega_max,
-        dt_critical: if omega_max > 0.0 {
-            2.0 / omega_max
-        } else {
-            f64::INFINITY
-        },
-        dt_exceeds_explicit_limit: omega_max > 0.0 && config.time.dt >= 2.0 / omega_max,
+        dt_critical: limit.dt_critical,
+        dt_exceeds_explicit_limit: config.time.dt >= limit.dt_critical,
         relative_residual_all_dofs: None,
         relative_residual_free_dofs: None,
         validation: validation_main,
         explicit_run: None,
     };
     warn.extend(warnings(
-        method,
+        method.method(),
         &derived.validation,
         &second_excitation,
         &frequencies,
@@ -650,9 +623,7 @@ pub fn derive_linear(
         &regime,
     ));
     let derivation = Derivation {
-        method,
-        lattice,
-        reduction: reduction_model,
+        model,
         fit,
         mass,
         derived,
@@ -670,14 +641,4 @@ pub fn derive_linear(
         warnings: warn,
     };
     Ok((derivation, setup))
-}
-
-/// The error of a tension-plate derivation asked for the spring derivation.
-pub(crate) fn springs_elsewhere() -> DeriveError {
-    DeriveError::InvalidOption {
-        name: "fit.derivation",
-        value: "\"springs\"".into(),
-        reason: "the spring derivation takes a Kirchhoff–Love shell (derive_springs runs it)"
-            .into(),
-    }
 }

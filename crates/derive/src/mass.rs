@@ -2,8 +2,9 @@
 //! matrix M are the candidate node masses.
 
 use nurbspring_linalg::{DenseMatrix, SparseMatrix, symmetric_eigen};
+use nurbspring_sim::PointDofs;
 
-use crate::DeriveError;
+use crate::error::{DeriveError, Input};
 
 /// Largest matrix (rows) whose eigenvalues are computed densely.
 pub const MAX_DENSE_EIGEN: usize = 4000;
@@ -15,12 +16,12 @@ pub const MAX_DENSE_EIGEN: usize = 4000;
 /// constant-weight D-NURBS mass matrix is `M = S ⊗ I₃` (docs/math.md §1), whose eigenvalues are
 /// those of S, each three times: then S alone is decomposed (27× less work).
 pub fn mass_eigenvalues(m: &SparseMatrix) -> Result<Vec<f64>, DeriveError> {
-    let factor = m.kron_identity_factor(3);
+    let factor = PointDofs::XYZ.scalar_factor(m);
     let decomposed = factor.as_ref().unwrap_or(m);
     if !within_dense_solve(decomposed) {
         // A scan needs them; with the mass fixed they are only listed (see `mass_step`).
-        return Err(DeriveError::InvalidOption {
-            name: "fit.mass",
+        return Err(DeriveError::InvalidInput {
+            input: Input::Mass,
             value: "\"eigenvalue-scan\"".to_string(),
             reason: format!(
                 "the mass matrix's eigenproblem has {} rows, more than the {MAX_DENSE_EIGEN} of a dense eigenvalue scan",
@@ -35,7 +36,7 @@ pub fn mass_eigenvalues(m: &SparseMatrix) -> Result<Vec<f64>, DeriveError> {
 
 /// Whether [`mass_eigenvalues`] of `m` is within the dense solve's size.
 pub fn mass_eigenvalues_computable(m: &SparseMatrix) -> bool {
-    within_dense_solve(m.kron_identity_factor(3).as_ref().unwrap_or(m))
+    within_dense_solve(PointDofs::XYZ.scalar_factor(m).as_ref().unwrap_or(m))
 }
 
 /// The size rule of the dense eigenvalue solve, on the matrix actually decomposed.
@@ -103,8 +104,8 @@ mod tests {
         assert!(mass_eigenvalues_computable(&diagonal(4000)));
         assert!(!mass_eigenvalues_computable(&diagonal(4001)));
         match mass_eigenvalues(&diagonal(4001)) {
-            Err(DeriveError::InvalidOption { name, reason, .. }) => {
-                assert_eq!(name, "fit.mass");
+            Err(DeriveError::InvalidInput { input, reason, .. }) => {
+                assert_eq!(input, Input::Mass);
                 assert!(reason.contains("4001 rows"), "{reason}");
             }
             other => panic!("{other:?}"),

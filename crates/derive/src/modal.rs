@@ -29,10 +29,14 @@ use nurbspring_linalg::{
 use nurbspring_msm::{Class, Constants, LinearKind, SpringLattice};
 use serde::Serialize;
 
-use crate::DeriveError;
+use crate::error::{DeriveError, Input};
 use crate::fnnls::BlockQp;
 use crate::modal_solution::ModalBasis;
 use crate::validation::match_modes;
+
+mod priors;
+use priors::*;
+pub use priors::{ElementPrior, element_priors, modes_within, resolved_modes};
 
 /// Lines from each edge of the lattice whose elements form groups of their own: the
 /// Greville abscissae of a cubic are uneven over the first three, and a clamp (two fixed
@@ -215,221 +219,6 @@ pub fn lowest_frequency(l: &SparseMatrix, masses: &[f64]) -> Result<f64, DeriveE
     Ok(e.values.first().copied().unwrap_or(0.0).max(0.0).sqrt())
 }
 
-/// What the fit knows of an element before it starts.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ElementPrior {
-    /// Its consistent constant `k⁰_e` (0: the material has no such term).
-    pub consistent: f64,
-    /// The scale `σ_e` of its constant in the fit: `k⁰_e`, or where that is 0 the size of
-    /// the material's terms at the element's spacing (0: the element is left out).
-    pub scale: f64,
-}
-
-/// The consistent constant and the scale of each element of `lattice` (docs/math.md §8.3),
-/// from the D-NURBS stiffness per derivative slot `[·, α11, α22, β11, β12, β22]`
-/// (`Material::stiffness_by_slot`) and the area factor of each node (`|c_u × c_v|` under
-/// area integration, else 1; the mean over an element's nodes scales it). With h the
-/// element's spacing (its extent over its intervals):
-///
-/// - `spring_u`: `α11`; `spring_v`: `α22`;
-/// - `bend_u`: `β11 + α11 h²/12` (the springs' second differences lack `α11 h² |c_uu|²/12`
-///   on a uniform lattice); `bend_v` likewise;
-/// - `third_u`: `β11 h²/6` (the bending stencil lacks `β11 h² |c_uuu|²/6`); `third_v`
-///   likewise;
-/// - `twist`: `β12`;
-/// - `diagonal`: 0 when the lattice has springs along u or v (they carry α), else
-///   `(α11 + α22)/2`.
-///
-/// Where the consistent constant is 0 the scale is, by the order of the stencil's
-/// derivative, `ᾱ + β̄/h²` (springs, diagonals), `β̄ + ᾱ h²` (bends, twist) or
-/// `β̄ h² + ᾱ h⁴` (third differences), with ᾱ, β̄ the means of the α and β terms.
-///
-/// ```
-/// use nurbspring_derive::element_priors;
-/// use nurbspring_geom::{KnotVector, NurbsCurve};
-/// use nurbspring_msm::{Class, Constants, LatticeOptions, LinearKind, ParameterGrid, SpringLattice};
-/// // A straight chain of 5 nodes, h = 0.25: springs α, bends β + α h²/12, thirds β h²/6.
-/// let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
-/// let c = NurbsCurve::try_new(k, vec![[0., 0., 0.], [1., 0., 0.]], vec![1.; 2]).unwrap();
-/// let options = LatticeOptions {
-///     grid: ParameterGrid::Uniform { nodes_u: 5, nodes_v: 1 },
-///     constants: Constants::from_pairs(Class::linear(&LinearKind::CHAIN).into_iter().map(|c| (c, 1.0))),
-///     ..LatticeOptions::default()
-/// };
-/// let l = SpringLattice::from_curve(&c, &options, &[]).unwrap();
-/// let priors = element_priors(&l, [0.0, 2.0, 0.0, 0.5, 0.0, 0.0], &[1.0; 5]);
-/// for (e, p) in l.elements.iter().zip(&priors) {
-///     let want = match e.kind {
-///         LinearKind::SpringU => 2.0,
-///         LinearKind::BendU => 0.5 + 2.0 * 0.0625 / 12.0,
-///         _ => 0.5 * 0.0625 / 6.0,
-///     };
-///     assert!((p.consistent - want).abs() < 1e-15 && p.scale == p.consistent);
-/// }
-/// // Without β the third differences have no consistent constant: their scale is α h⁴.
-/// let priors = element_priors(&l, [0.0, 2.0, 0.0, 0.0, 0.0, 0.0], &[1.0; 5]);
-/// let third = l.elements.iter().position(|e| e.kind == LinearKind::ThirdU).unwrap();
-/// assert_eq!(priors[third].consistent, 0.0);
-/// assert!((priors[third].scale - 2.0 * 0.25f64.powi(4)).abs() < 1e-15);
-/// ```
-pub fn element_priors(lattice: &SpringLattice, slots: [f64; 6], area: &[f64]) -> Vec<ElementPrior> {
-    let [_, a11, a22, b11, b12, b22] = slots;
-    let curve = lattice.grid.is_some_and(|(_, n_v)| n_v == 1);
-    let (alpha, beta) = if curve {
-        (a11, b11)
-    } else {
-        (0.5 * (a11 + a22), (b11 + b12 + b22) / 3.0)
-    };
-    let springs = lattice
-        .elements
-        .iter()
-        .any(|e| matches!(e.kind, LinearKind::SpringU | LinearKind::SpringV));
-    let params = lattice.params.as_deref().unwrap_or(&[]);
-    lattice
-        .elements
-        .iter()
-        .map(|e| {
-            let extent = |along_u: bool| -> f64 {
-                let t: Vec<f64> = e
-                    .nodes
-                    .iter()
-                    .map(|&a| {
-                        params
-                            .get(a)
-                            .map_or(0.0, |p| if along_u { p.0 } else { p.1 })
-                    })
-                    .collect();
-                t.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-                    - t.iter().copied().fold(f64::INFINITY, f64::min)
-            };
-            let along_u = !matches!(
-                e.kind,
-                LinearKind::SpringV | LinearKind::BendV | LinearKind::ThirdV
-            );
-            // The spacing: the extent over the intervals along the stencil's direction.
-            let h = match e.kind {
-                LinearKind::Diagonal | LinearKind::Twist => (extent(true) * extent(false)).sqrt(),
-                _ => extent(along_u) / (e.nodes.len() - 1) as f64,
-            };
-            let h2 = h * h;
-            let (consistent, order) = match e.kind {
-                LinearKind::SpringU => (a11, 1),
-                LinearKind::SpringV => (a22, 1),
-                LinearKind::BendU => (b11 + a11 * h2 / 12.0, 2),
-                LinearKind::BendV => (b22 + a22 * h2 / 12.0, 2),
-                LinearKind::ThirdU => (b11 * h2 / 6.0, 3),
-                LinearKind::ThirdV => (b22 * h2 / 6.0, 3),
-                LinearKind::Twist => (b12, 2),
-                LinearKind::Diagonal if springs => (0.0, 1),
-                LinearKind::Diagonal => (0.5 * (a11 + a22), 1),
-            };
-            let natural = match order {
-                1 => alpha + beta / h2,
-                2 => beta + alpha * h2,
-                _ => beta * h2 + alpha * h2 * h2,
-            };
-            let factor = e.nodes.iter().map(|&a| area[a]).sum::<f64>() / e.nodes.len() as f64;
-            let consistent = consistent * factor;
-            ElementPrior {
-                consistent,
-                scale: if consistent > 0.0 {
-                    consistent
-                } else if natural.is_finite() {
-                    natural * factor
-                } else {
-                    0.0
-                },
-            }
-        })
-        .collect()
-}
-
-/// The number of half-waves of a mode along u and along v: one more than the most sign
-/// changes along any grid line (values below 10⁻³ of the largest, and fixed nodes, skipped).
-fn half_waves(grid: (usize, usize), position: &[usize], shape: &[f64]) -> [usize; 2] {
-    let (n_u, n_v) = grid;
-    let top = shape.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-    let value = |i: usize, j: usize| -> Option<f64> {
-        let p = position[i * n_v + j];
-        (p != usize::MAX && shape[p].abs() > 1e-3 * top).then(|| shape[p])
-    };
-    let changes = |line: &mut dyn Iterator<Item = Option<f64>>| -> usize {
-        let signs: Vec<bool> = line.flatten().map(|v| v > 0.0).collect();
-        signs.windows(2).filter(|w| w[0] != w[1]).count()
-    };
-    let along_u = (0..n_v)
-        .map(|j| changes(&mut (0..n_u).map(|i| value(i, j))))
-        .max()
-        .unwrap_or(0);
-    let along_v = (0..n_u)
-        .map(|i| changes(&mut (0..n_v).map(|j| value(i, j))))
-        .max()
-        .unwrap_or(0);
-    [along_u + 1, along_v + 1]
-}
-
-/// The free lines of the lattice along u and v.
-fn free_lines(grid: (usize, usize), free: &[usize]) -> [usize; 2] {
-    let (n_u, n_v) = grid;
-    let (mut lines_u, mut lines_v) = (vec![false; n_u], vec![false; n_v]);
-    for &a in free {
-        lines_u[a / n_v] = true;
-        lines_v[a % n_v] = true;
-    }
-    let count = |lines: &[bool]| lines.iter().filter(|&&f| f).count();
-    [count(&lines_u), count(&lines_v)]
-}
-
-/// The modes the lattice resolves, by rank in `modes` (ascending frequency): at most
-/// `K_u` half-waves along u and `K_v` along v, `K = max(⌈(N + 1)/2⌉, min(N, MIN_HALF_WAVES))`
-/// with N the free lines in that direction (a wave of `⌈(N + 1)/2⌉` half-waves has four
-/// nodes per wavelength), until `min(K_u K_v, FITTED_MODES)` are taken ([`modes_within`]).
-/// Returns the ranks and `[K_u, K_v]`.
-pub fn resolved_modes(
-    grid: (usize, usize),
-    free: &[usize],
-    modes: &[SampledMode],
-) -> (Vec<usize>, [usize; 2]) {
-    let k = free_lines(grid, free).map(|n| (n + 1).div_ceil(2).max(n.min(MIN_HALF_WAVES)));
-    (modes_within(grid, free, modes, k), k)
-}
-
-/// The lowest modes of `modes` (by rank) with at most `k[0]` half-waves along u and `k[1]`
-/// along v, until `min(k[0] k[1], FITTED_MODES)` are taken. A repeated frequency (within
-/// [`REPEATED`]) is taken whole or not at all: its modes are any rotation of the repeated
-/// pair, so each must pass.
-pub fn modes_within(
-    grid: (usize, usize),
-    free: &[usize],
-    modes: &[SampledMode],
-    k: [usize; 2],
-) -> Vec<usize> {
-    let mut position = vec![usize::MAX; grid.0 * grid.1];
-    for (p, &a) in free.iter().enumerate() {
-        position[a] = p;
-    }
-    let count = (k[0] * k[1]).min(FITTED_MODES);
-    let mut out: Vec<usize> = Vec::new();
-    let mut start = 0;
-    while start < modes.len() && out.len() < count {
-        let mut end = start + 1;
-        while end < modes.len()
-            && (modes[end].omega - modes[start].omega).abs() <= REPEATED * modes[end].omega
-        {
-            end += 1;
-        }
-        let resolved = modes[start..end].iter().all(|m| {
-            let w = half_waves(grid, &position, &m.shape);
-            w[0] <= k[0] && w[1] <= k[1]
-        });
-        if resolved {
-            out.extend(start..end);
-        }
-        start = end;
-    }
-    out
-}
-
 /// One element in the fit: its group, `σ_e w_e`, and its (free node, coefficient) pairs.
 struct Fitted {
     element: usize,
@@ -449,8 +238,8 @@ pub fn modal_fit(
     candidates: &[SampledMode],
     reference: &[f64],
 ) -> Result<ModalSolution, DeriveError> {
-    let refused = |reason: &str| DeriveError::InvalidOption {
-        name: "fit.derivation",
+    let refused = |reason: &str| DeriveError::InvalidInput {
+        input: Input::Derivation,
         value: "\"modal\"".into(),
         reason: reason.to_string(),
     };
@@ -497,8 +286,8 @@ pub fn modal_fit(
         });
     }
     if fitted.is_empty() {
-        return Err(DeriveError::InvalidOption {
-            name: "msm.elements",
+        return Err(DeriveError::InvalidInput {
+            input: Input::Elements,
             value: format!("{} elements", lattice.elements.len()),
             reason: "no element acts on a free node, or the material has no stiffness".into(),
         });
@@ -577,8 +366,8 @@ impl Problem<'_> {
         let (lattice, priors, reference, fitted) =
             (*lattice, *priors, *reference, fitted.as_slice());
         let n = free.len();
-        let refused = |reason: &str| DeriveError::InvalidOption {
-            name: "fit.derivation",
+        let refused = |reason: &str| DeriveError::InvalidInput {
+            input: Input::Derivation,
             value: "\"modal\"".into(),
             reason: reason.to_string(),
         };
@@ -928,209 +717,4 @@ fn solve_with_floor(
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
-    use super::*;
-
-    /// `k · tridiag(−1, 2, −1)` of a chain of `n` nodes between two fixed ends.
-    pub(crate) fn chain(n: usize, k: f64) -> SparseMatrix {
-        let mut t = Vec::new();
-        for i in 0..n {
-            t.push((i, i, 2.0 * k));
-            if i + 1 < n {
-                t.push((i, i + 1, -k));
-                t.push((i + 1, i, -k));
-            }
-        }
-        SparseMatrix::from_triplets(n, n, &t).unwrap()
-    }
-
-    /// Without stiffness the lowest frequency is 0 (no shift of 0 is tried on a zero matrix).
-    #[test]
-    fn no_stiffness_has_a_zero_lowest_frequency() {
-        let l =
-            SparseMatrix::from_triplets(3, 3, &[(0, 0, 0.0), (1, 1, 0.0), (2, 2, 0.0)]).unwrap();
-        assert_eq!(lowest_frequency(&l, &[1.0, 2.0, 3.0]).unwrap(), 0.0);
-    }
-
-    /// The fixed-fixed chain's lowest frequency `2 √(k/m) sin(π / (2(n + 1)))` at stiffness
-    /// scales from 1e-10 to 1e10: the shift of the shift-invert solve must follow the scale of
-    /// `L` (a fixed shift of −1 cannot resolve eigenvalues of 1e-10 against 1). The chain is
-    /// long enough that the Krylov space does not cover it.
-    #[test]
-    fn the_lowest_frequency_of_a_chain_at_every_scale() {
-        let n = 300;
-        for k in [1e-10, 1.0, 1e10] {
-            for m in [1e-3, 1.0] {
-                let w = lowest_frequency(&chain(n, k), &vec![m; n]).unwrap();
-                let exact =
-                    2.0 * (k / m).sqrt() * (std::f64::consts::PI / (2.0 * (n + 1) as f64)).sin();
-                assert!(
-                    (w - exact).abs() < 1e-12 * exact,
-                    "k {k}, m {m}: {w} vs {exact}"
-                );
-            }
-        }
-    }
-
-    /// The reduced solve (masses eliminated by Woodbury and a Schur complement, the factors by
-    /// non-negative least squares) against the optimality conditions of the dense problem
-    /// (H assembled from its blocks): the gradient `Hz − g` vanishes on every positive factor
-    /// and every mass above the floor, is ≥ 0 on a factor at 0; a mass pulled below the floor
-    /// is held at it.
-    #[test]
-    fn the_reduced_solve_against_a_dense_one() {
-        let mut seed = 11u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
-        let (c, n, rows) = (3, 5, 2);
-        let a = DenseMatrix::from_fn(7, c + n, |_, _| rnd());
-        let gram = a.transpose().matmul(&a);
-        let hkk = DenseMatrix::from_fn(c, c, |i, j| gram[(i, j)] + if i == j { 0.5 } else { 0.0 });
-        let hkm = DenseMatrix::from_fn(c, n, |i, j| 0.3 * gram[(i, c + j)]);
-        let d: Vec<f64> = (0..n).map(|_| 2.0 + rnd()).collect();
-        let s = DenseMatrix::from_fn(rows, n, |_, _| rnd());
-        let dense = |gm: &[f64], gk: &[f64]| {
-            let t = c + n;
-            let h = DenseMatrix::from_fn(t, t, |i, j| match (i < c, j < c) {
-                (true, true) => hkk[(i, j)],
-                (true, false) => hkm[(i, j - c)],
-                (false, true) => hkm[(j, i - c)],
-                (false, false) => {
-                    let (p, q) = (i - c, j - c);
-                    (0..rows).map(|r| s[(r, p)] * s[(r, q)]).sum::<f64>()
-                        + if p == q { d[p] } else { 0.0 }
-                }
-            });
-            let g: Vec<f64> = gk.iter().chain(gm).copied().collect();
-            (h, g)
-        };
-        for trial in 0..20 {
-            let gk: Vec<f64> = (0..c).map(|_| rnd()).collect();
-            let gm: Vec<f64> = (0..n).map(|_| 3.0 + rnd()).collect();
-            let (h, g) = dense(&gm, &gk);
-            let (y, x) = solve_with_floor(&hkk, &hkm, &d, &s, &gk, &gm).unwrap();
-            let z: Vec<f64> = y.iter().chain(&x).copied().collect();
-            let hz = h.mul_vec(&z);
-            let floored: Vec<bool> = (0..n).map(|p| x[p] == MASS_FLOOR).collect();
-            for j in 0..c + n {
-                let grad = hz[j] - g[j];
-                if j < c && y[j] == 0.0 {
-                    assert!(
-                        grad >= -1e-10,
-                        "{trial}: factor {j} at 0 with gradient {grad}"
-                    );
-                } else if j >= c && floored[j - c] {
-                    assert!(x[j - c] == MASS_FLOOR);
-                } else {
-                    assert!(grad.abs() < 1e-10, "{trial}: unknown {j} gradient {grad}");
-                }
-            }
-            assert!(y.iter().all(|&v| v >= 0.0) && x.iter().all(|&v| v >= MASS_FLOOR));
-        }
-        // A right-hand side that pulls mass 0 below the floor.
-        let gk = vec![0.1; c];
-        let mut gm = vec![3.0; n];
-        gm[0] = -50.0;
-        let (_, x) = solve_with_floor(&hkk, &hkm, &d, &s, &gk, &gm).unwrap();
-        assert_eq!(x[0], MASS_FLOOR);
-    }
-
-    /// Bands by hand on 10 lines: the first three from each edge by their distance, the
-    /// rest inside; an element is banded by its line nearest an edge, the low edge first.
-    #[test]
-    fn bands_of_elements() {
-        assert_eq!(Band::of(0, 1, 10), Band::Low(0));
-        assert_eq!(Band::of(2, 4, 10), Band::Low(2));
-        assert_eq!(Band::of(3, 5, 10), Band::Inside);
-        assert_eq!(Band::of(5, 7, 10), Band::High(2));
-        assert_eq!(Band::of(8, 9, 10), Band::High(0));
-        // On a short lattice the low edge wins.
-        assert_eq!(Band::of(2, 3, 4), Band::Low(2));
-        let g = FitGroup {
-            kind: LinearKind::BendU,
-            u: Band::Low(1),
-            v: Band::High(0),
-        };
-        assert_eq!(g.name(), "bend_u[u1,v-0]");
-    }
-
-    /// Half-waves of separable shapes `sin(a π i/(N+1)) sin(b π j/(N+1))` on a 9 × 7 grid whose
-    /// outer ring is fixed; and the selection: `K = max(⌈(N+1)/2⌉, min(N, 3))` per direction,
-    /// the count capped at `K_u K_v`, a repeated frequency taken whole or not at all.
-    #[test]
-    fn half_waves_and_resolved_modes() {
-        let (n_u, n_v) = (9, 7);
-        let free: Vec<usize> = (0..n_u * n_v)
-            .filter(|a| {
-                let (i, j) = (a / n_v, a % n_v);
-                i > 0 && j > 0 && i + 1 < n_u && j + 1 < n_v
-            })
-            .collect();
-        let shape = |a: usize, b: usize| -> Vec<f64> {
-            free.iter()
-                .map(|&x| {
-                    let (i, j) = ((x / n_v) as f64, (x % n_v) as f64);
-                    (a as f64 * std::f64::consts::PI * i / (n_u - 1) as f64).sin()
-                        * (b as f64 * std::f64::consts::PI * j / (n_v - 1) as f64).sin()
-                })
-                .collect()
-        };
-        let mut position = vec![usize::MAX; n_u * n_v];
-        for (p, &a) in free.iter().enumerate() {
-            position[a] = p;
-        }
-        for (a, b) in [(1, 1), (3, 2), (5, 4), (7, 1)] {
-            assert_eq!(
-                half_waves((n_u, n_v), &position, &shape(a, b)),
-                [a, b],
-                "{a}, {b}"
-            );
-        }
-        // 7 free lines along u: K_u = 4; 5 along v: K_v = 3; at most 12 modes. Frequencies
-        // `√(a² + 1.7 b²)`, none repeated.
-        let mut modes = Vec::new();
-        for a in 1..=7 {
-            for b in 1..=5 {
-                modes.push((((a * a) as f64 + 1.7 * (b * b) as f64).sqrt(), a, b));
-            }
-        }
-        modes.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let sampled: Vec<SampledMode> = modes
-            .iter()
-            .map(|&(w, a, b)| SampledMode {
-                omega: w,
-                shape: shape(a, b),
-            })
-            .collect();
-        let (picked, k) = resolved_modes((n_u, n_v), &free, &sampled);
-        assert_eq!(k, [4, 3]);
-        let labels: Vec<(usize, usize)> =
-            picked.iter().map(|&i| (modes[i].1, modes[i].2)).collect();
-        assert!(labels.iter().all(|&(a, b)| a <= 4 && b <= 3), "{labels:?}");
-        // (1,1) … (4,3): 12 modes.
-        assert_eq!(labels.len(), 12, "{labels:?}");
-        for w in picked.windows(2) {
-            assert!(w[0] < w[1]);
-        }
-        // A repeated frequency with a member beyond K is left out whole: (1,2) paired with a
-        // copy of (5,1) at its frequency.
-        let mut paired = sampled.clone();
-        let at = modes.iter().position(|m| (m.1, m.2) == (1, 2)).unwrap();
-        paired.insert(
-            at + 1,
-            SampledMode {
-                omega: paired[at].omega,
-                shape: shape(5, 1),
-            },
-        );
-        let (picked, _) = resolved_modes((n_u, n_v), &free, &paired);
-        assert!(
-            !picked.contains(&at) && !picked.contains(&(at + 1)),
-            "{picked:?}"
-        );
-    }
-}
+pub(crate) mod tests;

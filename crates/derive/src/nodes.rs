@@ -3,7 +3,7 @@
 
 use nurbspring_linalg::SparseMatrix;
 
-use crate::DeriveError;
+use crate::error::{DeriveError, Input};
 use crate::evaluation::DnurbsModes;
 use crate::reference::scalar_rows;
 use crate::setup::Setup;
@@ -23,8 +23,8 @@ impl NodeMap {
             .filter(|&a| !lattice.fixed[a])
             .collect();
         if free.is_empty() {
-            return Err(DeriveError::InvalidOption {
-                name: "msm.grid",
+            return Err(DeriveError::InvalidInput {
+                input: Input::Grid,
                 value: format!("{} nodes, all fixed", lattice.n_nodes()),
                 reason: "the derivation needs free lattice nodes".into(),
             });

@@ -9,9 +9,10 @@ use serde::Serialize;
 
 use crate::Trajectory;
 use crate::fit::FitResult;
+use crate::method::Method;
 use crate::modal::ModalFitReport;
 use crate::reference::ReferenceKind;
-use crate::setup::Method;
+use crate::validation::ModalTruncation;
 
 /// One mass candidate of the paper's scan.
 #[derive(Clone, Debug, Serialize)]
@@ -127,20 +128,6 @@ pub struct Validation {
     pub msm_truncation: Option<ModalTruncation>,
     /// Every probe.
     pub probes: Vec<ProbeError>,
-}
-
-/// A modal run on the lowest modes of a large system (docs/math.md §8.6).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ModalTruncation {
-    /// Modes followed.
-    pub modes: usize,
-    /// Modes of the system (its unknowns).
-    pub unknowns: usize,
-    /// The share of the motion in the modes left out: the time-RMS M-norm of their
-    /// oscillation over that of every mode's ([`crate::ModalBasis::left_out`]); absent when
-    /// it cannot be computed (rigid modes).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub left_out: Option<f64>,
 }
 
 /// Stability, residuals and validation of a derived (or given) parameter set.
@@ -265,16 +252,21 @@ pub enum FitDetail {
     Reduction(ReductionReport),
 }
 
+/// The model a derivation yields.
+#[derive(Clone, Debug)]
+pub enum DerivedModel {
+    /// A lattice of nodes and elements (every derivation but the reduction).
+    Lattice(SpringLattice),
+    /// The node-space reduction (the `reduction` derivation: a linear model, not an MSM).
+    Reduction(NodeReduction),
+}
+
 /// Result of a derivation.
 #[derive(Clone, Debug)]
 pub struct Derivation {
-    /// Which derivation.
-    pub method: Method,
-    /// The derived lattice (`None` for the reduction).
-    pub lattice: Option<SpringLattice>,
-    /// The node-space reduction (the `reduction` derivation).
-    pub reduction: Option<NodeReduction>,
-    /// The fit.
+    /// The derived model.
+    pub model: DerivedModel,
+    /// The fit; its kind is the derivation's ([`Derivation::method`]).
     pub fit: FitDetail,
     /// The masses.
     pub mass: MassReport,
@@ -308,6 +300,32 @@ pub struct Derivation {
 }
 
 impl Derivation {
+    /// Which derivation this is.
+    pub fn method(&self) -> Method {
+        match &self.fit {
+            FitDetail::Paper(_) => Method::Paper,
+            FitDetail::Modal(_) => Method::Modal,
+            FitDetail::Excitation(_) => Method::Excitation,
+            FitDetail::Reduction(_) => Method::Reduction,
+        }
+    }
+
+    /// The derived lattice (`None` for the reduction).
+    pub fn lattice(&self) -> Option<&SpringLattice> {
+        match &self.model {
+            DerivedModel::Lattice(l) => Some(l),
+            DerivedModel::Reduction(_) => None,
+        }
+    }
+
+    /// The node-space reduction (the `reduction` derivation only).
+    pub fn reduction(&self) -> Option<&NodeReduction> {
+        match &self.model {
+            DerivedModel::Reduction(r) => Some(r),
+            DerivedModel::Lattice(_) => None,
+        }
+    }
+
     /// The paper's fit report (the paper's derivation only).
     pub fn paper_fit(&self) -> Option<&FitReport> {
         match &self.fit {

@@ -17,13 +17,14 @@ use crate::evaluation::{
 };
 use crate::fit::{FitDofs, FitResult};
 use crate::mass::{mass_eigenvalues, mass_eigenvalues_computable};
+use crate::method::Method;
 use crate::outcome::{
-    Derivation, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport, ParameterSet,
-    Spectrum, TrustRegionReport, Validation,
+    Derivation, DerivedModel, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport,
+    ParameterSet, Spectrum, TrustRegionReport, Validation,
 };
 use crate::reference::{ReferenceKind, run_scalar, sample_times};
 use crate::runner::{Watched, record_noted};
-use crate::setup::{Config, FitMethod, FitOptions, MassChoice, Method, Setup};
+use crate::setup::{Config, FitMethod, FitOptions, MassChoice, Setup};
 use crate::validation::{Trajectory, compare};
 
 /// The reading of eq. (15) the derived MSM uses.
@@ -492,9 +493,6 @@ pub fn derive_msm(
     cancel: Option<Arc<AtomicBool>>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Derivation, Setup), DeriveError> {
-    if config.method == crate::Method::Springs {
-        return Err(crate::linear::springs_elsewhere());
-    }
     let setup = Setup::new(config)?;
     let fit = fit_step(&setup, &config.fit)?;
     let scan_reference = reference_run(&setup, config, cancel.clone())?;
@@ -587,9 +585,7 @@ pub fn derive_msm(
         &regime,
     );
     let derivation = Derivation {
-        method: Method::Paper,
-        lattice: Some(lattice),
-        reduction: None,
+        model: DerivedModel::Lattice(lattice),
         fit: FitDetail::Paper(fit),
         mass,
         derived,

@@ -4,13 +4,13 @@
 
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::{
-    IntegratorKind, LinearModel, RunOptions, Sample, State, SystemMatrix, simulate,
+    IntegratorKind, LinearModel, PointDofs, RunOptions, Sample, State, SystemMatrix, simulate,
 };
 use serde::Serialize;
 
 use crate::modal_solution::ModalBasis;
-use crate::outcome::ModalTruncation;
 use crate::scalar::ScalarSystem;
+use crate::validation::ModalTruncation;
 use crate::{DeriveError, Trajectory};
 
 /// Largest number of samples of a validation run.
@@ -104,14 +104,14 @@ pub fn run_scalar(
         return Ok((traj, kind));
     }
     // Damped: Newmark on the 3-D system M ü + c M u̇ + K u = f.
-    let m3 = sys.mass.kron_identity(3);
+    let m3 = PointDofs::XYZ.expand(&sys.mass);
     let mut d3 = m3.clone();
     d3.scale(sys.damping_ratio);
     let n3 = m3.nrows();
     let model = LinearModel {
         mass: SystemMatrix::Sparse(m3),
         damping: Some(SystemMatrix::Sparse(d3)),
-        stiffness: sys.stiffness.kron_identity(3),
+        stiffness: PointDofs::XYZ.expand(&sys.stiffness),
         rest: vec![0.0; n3],
         force: sys.load.iter().flatten().copied().collect(),
     };
@@ -142,12 +142,10 @@ pub fn run_scalar(
     Ok((traj, ReferenceKind::Newmark))
 }
 
-/// The scalar rows of a 3-D interleaved matrix with identical x, y, z blocks: entry
-/// `(3a, 3k)` for every row `a` and column `k` (the Ω of constant weights is `R ⊗ I₃`).
+/// The scalar rows of a 3-D interleaved matrix with identical x, y, z blocks
+/// ([`PointDofs::scalar_part`]; the Ω of constant weights is `R ⊗ I₃`).
 pub fn scalar_rows(a: &SparseMatrix) -> SparseMatrix {
-    let rows: Vec<usize> = (0..a.nrows() / 3).map(|r| 3 * r).collect();
-    let cols: Vec<usize> = (0..a.ncols() / 3).map(|c| 3 * c).collect();
-    a.submatrix(&rows, &cols)
+    PointDofs::XYZ.scalar_part(a)
 }
 
 #[cfg(test)]

@@ -5,9 +5,9 @@
 
 use nurbspring_dnurbs::DnurbsModel;
 use nurbspring_linalg::SparseMatrix;
-use nurbspring_sim::{DynamicModel, State};
+use nurbspring_sim::{DynamicModel, PointDofs, State};
 
-use crate::DeriveError;
+use crate::error::{DeriveError, ScalarObstacle};
 
 /// A linear scalar system, one copy per coordinate: `M ü + c M u̇ + K u = f` for the
 /// displacements `u` of its unknowns (the free control points of a D-NURBS, or the free nodes
@@ -83,27 +83,24 @@ impl ScalarSystem {
         initial: &State,
         what: &'static str,
     ) -> Result<Self, DeriveError> {
-        let refuse = |reason: &str| DeriveError::InvalidOption {
-            name: "fit.derivation",
-            value: format!("\"{what}\""),
-            reason: reason.to_string(),
+        let refuse = |obstacle| DeriveError::NotScalar {
+            method: what,
+            obstacle,
         };
         if model.options().weights_as_dofs {
-            return Err(refuse(
-                "needs constant weights (dnurbs.weights_as_dofs = false)",
-            ));
+            return Err(refuse(ScalarObstacle::WeightsAsDofs));
         }
         if model.has_linear_constraints() {
-            return Err(refuse("needs a model without constraints.linear"));
+            return Err(refuse(ScalarObstacle::LinearConstraints));
         }
         let n_cp = model.geometry().n_control_points();
         let fixed = model.fixed_points();
         let free: Vec<usize> = (0..n_cp).filter(|k| !fixed.contains(k)).collect();
         if free.is_empty() {
-            return Err(refuse("needs at least one free control point"));
+            return Err(refuse(ScalarObstacle::NoFreeControlPoint));
         }
-        // With fixed points only, the free dofs are 3k, 3k+1, 3k+2 of the free points.
-        let x_rows: Vec<usize> = (0..free.len()).map(|i| 3 * i).collect();
+        // With fixed points only, the free dofs are the x, y, z of the free points.
+        let x_rows = PointDofs::XYZ.scalar_rows(free.len());
         let mass = model.reduced_mass().submatrix(&x_rows, &x_rows);
         let stiffness = model.reduced_stiffness().submatrix(&x_rows, &x_rows);
         let q0 = model.reduced_coordinates(model.p0());

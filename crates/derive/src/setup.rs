@@ -14,6 +14,7 @@ use nurbspring_sim::{
 use serde::{Deserialize, Serialize};
 
 use crate::fit::{FitDofs, FitResult, StiffnessFit};
+use crate::method::Method;
 use crate::omega::NodeState;
 use crate::runner::{Watched, record_noted};
 use crate::{DeriveError, Omega, Trajectory};
@@ -109,63 +110,6 @@ pub struct TimeSettings {
     pub msm_integrator: IntegratorKind,
 }
 
-/// Which derivation (scene key `fit.derivation`, `derive --derivation`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Class constants and node masses fitted to the lowest D-NURBS modes, then one mass
-    /// scale for the lowest frequency (docs/math.md §8.3; the default).
-    #[default]
-    Modal,
-    /// The paper's: eq. (15) and the eigenvalue scan of M (docs/math.md §6).
-    Paper,
-    /// The modal fit refined on the modes the scene's own loads and initial velocity excite.
-    Excitation,
-    /// The exact linear reduction of the D-NURBS onto the nodes (not an MSM: a reference).
-    Reduction,
-    /// Rest-length springs and dihedral hinges from a Kirchhoff–Love shell, calibrated on its
-    /// lowest modes (docs/math.md §11; the default for shell scenes).
-    Springs,
-}
-
-impl Method {
-    /// Every derivation.
-    pub const ALL: [Method; 5] = [
-        Method::Modal,
-        Method::Paper,
-        Method::Excitation,
-        Method::Reduction,
-        Method::Springs,
-    ];
-
-    /// `"modal"`, `"paper"`, `"excitation"`, `"reduction"` or `"springs"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Modal => "modal",
-            Method::Paper => "paper",
-            Method::Excitation => "excitation",
-            Method::Reduction => "reduction",
-            Method::Springs => "springs",
-        }
-    }
-
-    /// Parses a [`Method::name`].
-    pub fn parse(s: &str) -> Option<Method> {
-        Self::ALL.into_iter().find(|m| m.name() == s)
-    }
-
-    /// True for the derivations whose model is linear (validated by exact modes).
-    pub fn is_linear(self) -> bool {
-        !matches!(self, Method::Paper | Method::Springs)
-    }
-
-    /// True for the derivation of a Kirchhoff–Love shell (the others derive from the
-    /// tension plate).
-    pub fn is_shell(self) -> bool {
-        self == Method::Springs
-    }
-}
-
 /// Everything a derivation needs (a scene, translated).
 #[derive(Clone, Debug)]
 pub struct Config {
@@ -194,8 +138,8 @@ pub struct Config {
     /// Constants and node mass given by the scene (for the paper's scene, the published
     /// ones), evaluated beside the derived ones.
     pub given: Option<(Constants, f64)>,
-    /// The damping coefficient of every node of the paper's lattice when the scene gives one
-    /// (`msm.damping`); `None`: the D-NURBS's damping per unit mass, `γ/μ` times the node
+    /// The damping coefficient of every node of the paper's lattice when the scene gives one;
+    /// `None`: the D-NURBS's damping per unit mass, `γ/μ` times the node
     /// mass (the D-NURBS's `D = (γ/μ) M`, as the linear derivations' nodes carry it).
     pub node_damping: Option<f64>,
 }
@@ -389,7 +333,7 @@ impl Setup {
         lattice
     }
 
-    /// The damping coefficient of a node of mass `m`: the scene's `msm.damping` when it gives
+    /// The damping coefficient of a node of mass `m`: the scene's node damping when it gives
     /// one, else `γ/μ · m` (the D-NURBS's damping per unit mass).
     pub fn node_damping(&self, m: f64) -> f64 {
         self.node_damping.unwrap_or(self.damping_ratio * m)

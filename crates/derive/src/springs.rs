@@ -249,8 +249,8 @@ fn refuse_unrepresentable(model: &DnurbsModel, loads: &Loads) -> Result<(), Deri
     let held_whole = 3 * model.fixed_points().len();
     let held = model.dof_map().fixed().len();
     if model.has_linear_constraints() || held != held_whole {
-        return Err(DeriveError::InvalidOption {
-            name: "constraints",
+        return Err(DeriveError::InvalidInput {
+            input: crate::Input::Constraints,
             value: "a partial hold, symmetry or linear constraint".into(),
             reason: "the spring derivation fixes lattice nodes whole; hold whole control points \
                      (fixed rings, clamped or pinned edges)"
@@ -258,9 +258,9 @@ fn refuse_unrepresentable(model: &DnurbsModel, loads: &Loads) -> Result<(), Deri
         });
     }
     if let Some(e) = loads.edges.iter().find(|e| e.moment != 0.0) {
-        return Err(DeriveError::InvalidOption {
-            name: "moment",
-            value: format!("{} on edge {}", e.moment, e.edge.name()),
+        return Err(DeriveError::InvalidInput {
+            input: crate::Input::EdgeLoads,
+            value: format!("moment {} on edge {}", e.moment, e.edge.name()),
             reason: "a spring lattice has no rotations, so an edge moment has no node forces \
                      that follow it through large rotation; give edge forces instead"
                 .into(),
@@ -306,8 +306,8 @@ fn apply_rules(
         }
     }
     let area_of = |p: usize, q: usize| edge_area.get(&(p.min(q), p.max(q))).copied();
-    let degenerate = |what: &str, p: usize, q: usize| DeriveError::InvalidOption {
-        name: "msm.grid",
+    let degenerate = |what: &str, p: usize, q: usize| DeriveError::InvalidInput {
+        input: crate::Input::Grid,
         value: format!("nodes {p} and {q}"),
         reason: format!(
             "the {what} between them has no area on the rest surface (coincident nodes, e.g. \
@@ -422,8 +422,8 @@ fn calibrate(
     let n_free = map.free_rows().len();
     let wanted = SPRING_MODES.min(model.n_free()).min(n_free);
     if wanted == 0 {
-        return Err(DeriveError::InvalidOption {
-            name: "constraints",
+        return Err(DeriveError::InvalidInput {
+            input: crate::Input::Constraints,
             value: "every node fixed".into(),
             reason: "the spring lattice has no free node".into(),
         });

@@ -4,7 +4,8 @@ use nurbspring_dnurbs::{Constraints, DnurbsOptions, Geometry, Loads, Material};
 use nurbspring_msm::LatticeOptions;
 use nurbspring_sim::IntegratorKind;
 
-use crate::setup::{Config, FitOptions, InitialConditions, Method, Setup, TimeSettings};
+use crate::method::Method;
+use crate::setup::{Config, FitOptions, InitialConditions, Setup, TimeSettings};
 
 /// A paper-method setup on `geometry`: unit μ and α, the outer ring fixed, the paper's
 /// spring classes on the default lattice, a short Newmark reference.

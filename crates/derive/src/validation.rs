@@ -3,7 +3,19 @@
 
 use serde::Serialize;
 
-use crate::outcome::ModalTruncation;
+/// A modal run on the lowest modes of a large system (docs/math.md §8.6).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ModalTruncation {
+    /// Modes followed.
+    pub modes: usize,
+    /// Modes of the system (its unknowns).
+    pub unknowns: usize,
+    /// The share of the motion in the modes left out: the time-RMS M-norm of their
+    /// oscillation over that of every mode's ([`crate::ModalBasis::left_out`]); absent when
+    /// it cannot be computed (rigid modes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub left_out: Option<f64>,
+}
 
 /// Sampled positions of the probe points over time.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

@@ -6,8 +6,7 @@
 
 use nurbspring_derive::{
     Config, Derivation, DnurbsModes, FitDofs, FitOptions, InitialConditions, Method, PERIODS,
-    Setup, TimeSettings, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, derive_linear,
-    derive_msm,
+    Setup, TimeSettings, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, derive, derive_msm,
 };
 use nurbspring_dnurbs::{Constraints, DnurbsOptions, Geometry, Integration, Loads, Material};
 use nurbspring_geom::{KnotVector, NurbsSurface};
@@ -102,13 +101,13 @@ fn distinct_non_zero(mut values: Vec<f64>) -> Vec<f64> {
 
 /// The lattice's angular frequencies from its own tangent stiffness and masses.
 fn lattice_frequencies(d: &Derivation) -> Vec<f64> {
-    let model = MsmModel::new(d.lattice.clone().unwrap()).unwrap();
+    let model = MsmModel::new(d.lattice().cloned().unwrap()).unwrap();
     let q0 = model.initial_positions().to_vec();
     let k = model.tangent_stiffness(&q0).to_dense();
     let m = model.mass().to_sparse().to_dense();
     let e = generalized_symmetric_eigen(&k, &m).unwrap();
     let omega = e.values.iter().map(|l| l.max(0.0).sqrt()).collect();
-    if d.method == Method::Paper {
+    if d.method() == Method::Paper {
         distinct_non_zero(omega)
     } else {
         distinct_of_triples(omega)
@@ -123,7 +122,7 @@ fn close(a: f64, b: f64, rel: f64) -> bool {
 /// (dual spacings of the node parameters, half-cells at the ends), times the area element
 /// `|c_u × c_v|` (central differences here) under area integration.
 fn check_fixed_node_masses(d: &Derivation, config: &Config) {
-    let lattice = d.lattice.as_ref().unwrap();
+    let lattice = d.lattice().unwrap();
     let params = lattice.params.as_ref().unwrap();
     let (n_u, n_v) = lattice.grid.unwrap();
     let dual = |t: &[f64], i: usize| {
@@ -197,7 +196,7 @@ fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
         "trust region"
     );
     // The probe is the lattice node nearest the asked parameter, reported at its own.
-    let lattice = d.lattice.as_ref().unwrap();
+    let lattice = d.lattice().unwrap();
     let params = lattice.params.as_ref().unwrap();
     assert_eq!(d.probe_nodes, setup.probe_nodes());
     assert_eq!(d.probes, setup.probes());
@@ -210,7 +209,7 @@ fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
         "{}",
         mass.total_dnurbs
     );
-    let lattice = d.lattice.as_ref().unwrap();
+    let lattice = d.lattice().unwrap();
     let total: f64 = lattice.masses.iter().sum();
     let free: f64 = (0..lattice.n_nodes())
         .filter(|&a| !lattice.fixed[a])
@@ -386,12 +385,12 @@ fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
 #[test]
 fn the_modal_derivation_reports_its_own_numbers() {
     let config = config(Method::Modal);
-    let (d, setup) = derive_linear(&config, None).unwrap();
+    let (d, setup) = derive(&config, None, &mut |_, _| {}).unwrap();
     check_judgement(&d, &setup, &config);
     // The modal fit calibrates the lowest frequency.
     assert!(d.frequencies[0].relative_difference.abs() < 1e-8);
     // It fits the classes with an element acting on a free node, no other.
-    let lattice = d.lattice.as_ref().unwrap();
+    let lattice = d.lattice().unwrap();
     let acting: Vec<Class> = Class::linear(&LinearKind::ALL)
         .into_iter()
         .filter(|&c| {
@@ -526,7 +525,7 @@ fn the_excitation_derivation_reports_its_own_numbers() {
 }
 
 fn check_excitation(config: &Config) {
-    let (d, setup) = derive_linear(config, None).unwrap();
+    let (d, setup) = derive(config, None, &mut |_, _| {}).unwrap();
     check_judgement(&d, &setup, config);
     assert!(d.frequencies[0].relative_difference.abs() < 1e-8);
     let nurbspring_derive::FitDetail::Excitation(report) = &d.fit else {
@@ -588,7 +587,7 @@ fn check_excitation(config: &Config) {
     // share) the MSM mode of best MAC among the lowest 2·8 of `L x = ω² m x` before the
     // calibration (masses / mass_scale), the weighted log ratio of the frequencies and the
     // difference of the normalized shapes.
-    let lattice = d.lattice.as_ref().unwrap();
+    let lattice = d.lattice().unwrap();
     let free_nodes: Vec<usize> = (0..lattice.n_nodes())
         .filter(|&a| !lattice.fixed[a])
         .collect();
@@ -698,8 +697,8 @@ fn check_excitation(config: &Config) {
     // scales all 1.
     let mut modal_config = config.clone();
     modal_config.method = Method::Modal;
-    let (modal, _) = derive_linear(&modal_config, None).unwrap();
-    let modal_lattice = modal.lattice.as_ref().unwrap();
+    let (modal, _) = derive(&modal_config, None, &mut |_, _| {}).unwrap();
+    let modal_lattice = modal.lattice().unwrap();
     let start: Vec<f64> = free_nodes
         .iter()
         .map(|&a| modal_lattice.masses[a])
@@ -757,7 +756,7 @@ fn the_modal_derivation_under_area_integration() {
         .map(|p| [p[0] + 0.3 * p[1], p[1] + 0.2 * p[0], 4.0 * p[2]])
         .collect();
     config.geometry = Geometry::Surface(s.with_control_points(pts).unwrap());
-    let (d, _setup) = derive_linear(&config, None).unwrap();
+    let (d, _setup) = derive(&config, None, &mut |_, _| {}).unwrap();
     check_fixed_node_masses(&d, &config);
     assert!(d.frequencies[0].relative_difference.abs() < 1e-8);
 }
@@ -770,13 +769,13 @@ fn the_exact_reduction_reproduces_the_dnurbs_at_the_nodes() {
     let mut config = config(Method::Reduction);
     config.lattice.grid = ParameterGrid::Greville;
     config.loads.gravity = [0.0, 0.0, -1.0];
-    let (d, setup) = derive_linear(&config, None).unwrap();
+    let (d, setup) = derive(&config, None, &mut |_, _| {}).unwrap();
     // Started from the nodes' share of the D-NURBS's initial state (the scene's velocity), the
     // exact reduction follows the D-NURBS at the watched node to round-off.
     let v = &d.derived.validation;
     assert!(v.dnurbs_amplitude > 1e-3, "{}", v.dnurbs_amplitude);
     assert!(v.relative_rms < 1e-13, "{}", v.relative_rms);
-    let r = d.reduction.as_ref().expect("a reduction");
+    let r = d.reduction().expect("a reduction");
     let n = r.free.len();
     assert_eq!(n, 12);
     let e = generalized_symmetric_eigen(&r.stiffness, &r.mass).unwrap();
@@ -815,7 +814,7 @@ fn the_modal_derivation_carries_gravity() {
     let mut config = config(Method::Modal);
     config.loads.gravity = [0.0, 0.0, -1.0];
     config.initial.velocities = Vec::new();
-    let (d, _) = derive_linear(&config, None).unwrap();
+    let (d, _) = derive(&config, None, &mut |_, _| {}).unwrap();
     let v = &d.derived.validation;
     assert!(v.dnurbs_amplitude > 0.0);
     assert!(v.relative_rms < WARN_RELATIVE_RMS, "{}", v.relative_rms);
@@ -836,14 +835,14 @@ fn reductions_are_exact_guyan_or_refused_by_the_count_of_free_nodes() {
         nodes_u: 4,
         nodes_v: 4,
     };
-    let (d, _) = derive_linear(&fewer, None).unwrap();
-    let r = d.reduction.as_ref().unwrap();
+    let (d, _) = derive(&fewer, None, &mut |_, _| {}).unwrap();
+    let r = d.reduction().unwrap();
     assert!(r.free.len() < 12 && r.guyan, "{} free nodes", r.free.len());
     let mut greville = config(Method::Reduction);
     greville.lattice.grid = ParameterGrid::Greville;
-    let (d, _) = derive_linear(&greville, None).unwrap();
-    assert!(!d.reduction.as_ref().unwrap().guyan);
-    assert!(derive_linear(&config(Method::Reduction), None).is_err());
+    let (d, _) = derive(&greville, None, &mut |_, _| {}).unwrap();
+    assert!(!d.reduction().unwrap().guyan);
+    assert!(derive(&config(Method::Reduction), None, &mut |_, _| {}).is_err());
 }
 
 /// A chain on a curve under area (arc-length) integration: its fixed end nodes carry
@@ -877,8 +876,8 @@ fn a_chain_under_arc_length_integration_has_its_dual_cell_masses() {
             .map(|c| (c, 1.0)),
     );
     config.dnurbs.integration = Integration::Area;
-    let (d, _) = derive_linear(&config, None).unwrap();
-    let lattice = d.lattice.as_ref().unwrap();
+    let (d, _) = derive(&config, None, &mut |_, _| {}).unwrap();
+    let lattice = d.lattice().unwrap();
     let h = 1e-6;
     for (a, u, tau) in [(0, 0.0f64, 0.0625), (8, 1.0, 0.0625)] {
         assert!(lattice.fixed[a]);
@@ -899,7 +898,7 @@ fn a_chain_under_arc_length_integration_has_its_dual_cell_masses() {
 #[test]
 fn the_explicit_limit_is_judged_against_the_scenes_step() {
     let mut config = config(Method::Modal);
-    let (d, _) = derive_linear(&config, None).unwrap();
+    let (d, _) = derive(&config, None, &mut |_, _| {}).unwrap();
     let limit = d.derived.dt_critical;
     assert!(config.time.dt < limit && !d.derived.dt_exceeds_explicit_limit);
     assert!(close(limit, 2.0 / d.derived.omega_max, 1e-15));
@@ -909,7 +908,7 @@ fn the_explicit_limit_is_judged_against_the_scenes_step() {
         config.time.dt < 2.0,
         "a step beyond 2 s would not tell 2/ω from 2"
     );
-    let (d, _) = derive_linear(&config, None).unwrap();
+    let (d, _) = derive(&config, None, &mut |_, _| {}).unwrap();
     assert!(close(d.derived.dt_critical, limit, 1e-12));
     assert!(d.derived.dt_exceeds_explicit_limit);
 }
@@ -939,12 +938,18 @@ fn a_reduction_whose_nodes_do_not_determine_the_surface_is_refused() {
         nodes_u: 3,
         nodes_v: 6,
     };
-    let Err(e) = derive_linear(&config, None) else {
+    let Err(e) = derive(&config, None, &mut |_, _| {}) else {
         panic!("a singular reduction must be refused");
     };
     let text = e.to_string();
     assert!(
-        text.contains("msm.grid") && text.contains("the reduction is singular"),
+        matches!(
+            e,
+            nurbspring_derive::DeriveError::InvalidInput {
+                input: nurbspring_derive::Input::Grid,
+                ..
+            }
+        ) && text.contains("the reduction is singular"),
         "{text}"
     );
     // The nodes named carry the null combination: at least two of them (no single node's
@@ -968,7 +973,7 @@ fn a_reduction_whose_nodes_do_not_determine_the_surface_is_refused() {
 fn the_reduction_scales_with_the_material() {
     let mut config = config(Method::Reduction);
     config.lattice.grid = ParameterGrid::Greville;
-    let (soft, _) = derive_linear(&config, None).unwrap();
+    let (soft, _) = derive(&config, None, &mut |_, _| {}).unwrap();
     for a in [
         &mut config.material.alpha11,
         &mut config.material.alpha22,
@@ -977,8 +982,8 @@ fn the_reduction_scales_with_the_material() {
     ] {
         *a *= 1e6;
     }
-    let (stiff, _) = derive_linear(&config, None).unwrap();
-    let (a, b) = (soft.reduction.unwrap(), stiff.reduction.unwrap());
+    let (stiff, _) = derive(&config, None, &mut |_, _| {}).unwrap();
+    let (a, b) = (soft.reduction().unwrap(), stiff.reduction().unwrap());
     let n = a.free.len();
     for i in 0..n {
         for j in 0..n {
@@ -1000,8 +1005,11 @@ fn the_reduction_scales_with_the_material() {
 fn the_excitation_derivation_refuses_a_scene_without_excitation() {
     let mut config = config(Method::Excitation);
     config.initial.velocities = Vec::new();
-    let Err(e) = derive_linear(&config, None) else {
+    let Err(e) = derive(&config, None, &mut |_, _| {}) else {
         panic!("a scene without excitation must be refused");
     };
-    assert!(e.to_string().contains("initial.velocity"), "{e}");
+    assert!(
+        matches!(e, nurbspring_derive::DeriveError::NoExcitation),
+        "{e}"
+    );
 }

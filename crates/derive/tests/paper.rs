@@ -61,7 +61,7 @@ fn derivation_invariants() {
     let config = paper_config();
     let (d, setup) = derive_msm(&config, None, &mut |_, _| {}).unwrap();
     // 5 × 3 lattice, 3 free nodes (the interior row), 45 × 45 K_S.
-    let lattice = d.lattice.as_ref().unwrap();
+    let lattice = d.lattice().unwrap();
     assert_eq!(lattice.n_nodes(), 15);
     assert_eq!(lattice.fixed.iter().filter(|&&f| !f).count(), 3);
     let fit = d.paper_fit().unwrap();

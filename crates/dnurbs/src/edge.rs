@@ -2,6 +2,7 @@
 //! moment per unit length about the edge, integrated along the rest edge by Gauss–Legendre
 //! quadrature on its knot spans.
 
+use nurbspring_geom::cross;
 use nurbspring_geom::{Deriv, GaussLegendre, Jacobian};
 use nurbspring_linalg::SparseMatrix;
 
@@ -84,14 +85,6 @@ pub(crate) struct EdgeLoads {
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn unit(a: [f64; 3]) -> [f64; 3] {

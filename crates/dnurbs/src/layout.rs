@@ -3,7 +3,9 @@
 //! parallel loop over element rows, and the rational basis at the Gauss points from 1-D
 //! B-spline values (The NURBS Book eq. (4.9)–(4.10)).
 
-use nurbspring_geom::{BSplineBasis, BasisScratch, GaussLegendre};
+use nurbspring_geom::{
+    BSplineBasis, BasisScratch, GaussLegendre, area_element, line_element, quotient_rule,
+};
 use nurbspring_linalg::KroneckerPattern;
 use rayon::prelude::*;
 
@@ -328,24 +330,17 @@ pub(crate) fn rational_basis(
         }
     }
     let inv = 1.0 / sum[0];
-    let (r0, rest) = r.split_at_mut(nl);
-    let (r1, rest) = rest.split_at_mut(nl);
-    let (r2, rest) = rest.split_at_mut(nl);
-    let (r3, rest) = rest.split_at_mut(nl);
-    let (r4, r5) = rest.split_at_mut(nl);
     for a in 0..nl {
-        let v = r0[a] * inv;
-        r0[a] = v;
-        if order >= 1 {
-            let ru = (r1[a] - v * sum[1]) * inv;
-            let rv = (r2[a] - v * sum[2]) * inv;
-            if order >= 2 {
-                r3[a] = (r3[a] - 2.0 * ru * sum[1] - v * sum[3]) * inv;
-                r4[a] = (r4[a] - ru * sum[2] - rv * sum[1] - v * sum[4]) * inv;
-                r5[a] = (r5[a] - 2.0 * rv * sum[2] - v * sum[5]) * inv;
-            }
-            r1[a] = ru;
-            r2[a] = rv;
+        let n = [0, 1, 2, 3, 4, 5].map(|s| r[s * nl + a]);
+        let q = quotient_rule(&n, &sum, inv, order);
+        // Slots above `order` keep what they held.
+        let slots = match order {
+            0 => 1,
+            1 => 3,
+            _ => 6,
+        };
+        for (s, &x) in q.iter().enumerate().take(slots) {
+            r[s * nl + a] = x;
         }
     }
 }
@@ -370,14 +365,9 @@ pub(crate) fn local_area_factor(
         }
     }
     if curve {
-        (cu[0] * cu[0] + cu[1] * cu[1] + cu[2] * cu[2]).sqrt()
+        line_element(cu)
     } else {
-        let n = [
-            cu[1] * cv[2] - cu[2] * cv[1],
-            cu[2] * cv[0] - cu[0] * cv[2],
-            cu[0] * cv[1] - cu[1] * cv[0],
-        ];
-        (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+        area_element(cu, cv)
     }
 }
 

@@ -17,34 +17,75 @@ pub(crate) fn read_text(path: &Path) -> Result<String, ExchangeError> {
 }
 
 pub(crate) fn read_text_limited(path: &Path, limit: u64) -> Result<String, ExchangeError> {
-    let io = |source| ExchangeError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    // Refuse FIFOs, devices and directories before opening (opening a FIFO would block).
-    if !std::fs::metadata(path).map_err(io)?.is_file() {
-        return Err(ExchangeError::NotRegularFile {
+    read_text_bounded(path, limit).map_err(|e| match e {
+        BoundedReadError::Io(source) => ExchangeError::Io {
             path: path.to_path_buf(),
-        });
+            source,
+        },
+        BoundedReadError::NotRegularFile { .. } => ExchangeError::NotRegularFile {
+            path: path.to_path_buf(),
+        },
+        BoundedReadError::TooLarge { limit } => ExchangeError::FileTooLarge {
+            path: path.to_path_buf(),
+            limit,
+        },
+        BoundedReadError::NotText { offset } => ExchangeError::NotText {
+            path: path.to_path_buf(),
+            offset,
+        },
+    })
+}
+
+/// Why [`read_text_bounded`] refused a file.
+#[derive(Debug)]
+pub enum BoundedReadError {
+    /// It could not be opened or read.
+    Io(std::io::Error),
+    /// A folder (`folder`), a FIFO, a socket or a device.
+    NotRegularFile {
+        /// True for a folder.
+        folder: bool,
+    },
+    /// More than `limit` bytes.
+    TooLarge {
+        /// The limit.
+        limit: u64,
+    },
+    /// Not UTF-8: the first invalid byte.
+    NotText {
+        /// Its offset.
+        offset: usize,
+    },
+}
+
+/// Reads a regular file of at most `limit` bytes as UTF-8 text, the one bounded reader of the
+/// project. The file is opened without blocking (opening a FIFO would block until a writer
+/// appears) and its kind checked through the handle; the size is checked on what is read
+/// through the handle (at most `limit + 1` bytes), so a file that grows while it is read is
+/// still refused.
+pub fn read_text_bounded(path: &Path, limit: u64) -> Result<String, BoundedReadError> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32);
     }
-    let file = File::open(path).map_err(io)?;
-    if !file.metadata().map_err(io)?.is_file() {
-        return Err(ExchangeError::NotRegularFile {
-            path: path.to_path_buf(),
+    let file: File = options.open(path).map_err(BoundedReadError::Io)?;
+    let meta = file.metadata().map_err(BoundedReadError::Io)?;
+    if !meta.is_file() {
+        return Err(BoundedReadError::NotRegularFile {
+            folder: meta.is_dir(),
         });
     }
     let mut bytes = Vec::new();
     file.take(limit.saturating_add(1))
         .read_to_end(&mut bytes)
-        .map_err(io)?;
+        .map_err(BoundedReadError::Io)?;
     if bytes.len() as u64 > limit {
-        return Err(ExchangeError::FileTooLarge {
-            path: path.to_path_buf(),
-            limit,
-        });
+        return Err(BoundedReadError::TooLarge { limit });
     }
-    String::from_utf8(bytes).map_err(|e| ExchangeError::NotText {
-        path: path.to_path_buf(),
+    String::from_utf8(bytes).map_err(|e| BoundedReadError::NotText {
         offset: e.utf8_error().valid_up_to(),
     })
 }

@@ -54,7 +54,7 @@ pub mod iges;
 pub mod obj;
 
 pub use error::{ExchangeError, Location, Section};
-pub use fsio::MAX_FILE_BYTES;
+pub use fsio::{BoundedReadError, MAX_FILE_BYTES, read_text_bounded};
 
 use nurbspring_geom::{NurbsCurve, NurbsSurface};
 

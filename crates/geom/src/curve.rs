@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use crate::basis::BasisScratch;
 use crate::jacobian::Jacobian;
 use crate::surface::{SurfaceDerivatives, check_points_and_weights, weight_column};
-use crate::{BSplineBasis, GeomError, KnotVector};
+use crate::{BSplineBasis, GeomError, KnotVector, quotient_rule};
 
 /// A NURBS curve `c(u) = Σ R_i(u) P_i`, `R_i = w_i N_i / Σ w_j N_j`.
 ///
@@ -128,15 +128,13 @@ impl NurbsCurve {
         let mut r = Vec::with_capacity(p + 1);
         let mut aa = Vec::with_capacity(p + 1);
         for (a, &k) in indices.iter().enumerate() {
-            let n0 = nd[a];
-            let mut av = [0.0; 6];
-            av[0] = n0 * inv;
-            if order >= 1 {
-                av[1] = (nd[p + 1 + a] - av[0] * w[1]) * inv;
-            }
-            if order >= 2 {
-                av[3] = (nd[2 * (p + 1) + a] - 2.0 * av[1] * w[1] - av[0] * w[2]) * inv;
-            }
+            // The u slots of the quotient rule; a curve has no v.
+            let at = |o: usize| if o <= order { nd[o * (p + 1) + a] } else { 0.0 };
+            let n = [at(0), at(1), 0.0, at(2), 0.0, 0.0];
+            let mut av = quotient_rule(&n, &[w[0], w[1], 0.0, w[2], 0.0, 0.0], inv, order);
+            av[2] = 0.0;
+            av[4] = 0.0;
+            av[5] = 0.0;
             aa.push(av);
             r.push(av.map(|x| x * self.weights[k]));
         }

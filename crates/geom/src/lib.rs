@@ -32,6 +32,7 @@
 
 mod basis;
 mod curve;
+mod differential;
 mod error;
 mod jacobian;
 mod knots;
@@ -41,6 +42,7 @@ mod surface;
 
 pub use basis::{BSplineBasis, BasisScratch};
 pub use curve::{CurveDerivatives, NurbsCurve};
+pub use differential::{area_element, cross, line_element, norm, quotient_rule};
 pub use error::GeomError;
 pub use jacobian::{Deriv, Jacobian, SurfaceJacobian};
 pub use knots::{KnotVector, LINEAR_SPAN_SEARCH};

@@ -4,7 +4,7 @@ use rayon::prelude::*;
 
 use crate::basis::BasisScratch;
 use crate::jacobian::{Deriv, SurfaceJacobian};
-use crate::{BSplineBasis, GeomError, KnotVector};
+use crate::{BSplineBasis, GeomError, KnotVector, cross, norm, quotient_rule};
 
 /// Degrees below this use stack buffers on the point-evaluation path.
 const STACK: usize = 16;
@@ -254,17 +254,7 @@ impl NurbsSurface {
         for l in 0..n_local {
             let n = out.a[l];
             // A = N / W and its derivatives by the quotient rule.
-            let mut a = [0.0; 6];
-            a[0] = n[0] * inv_w;
-            if order >= 1 {
-                a[1] = (n[1] - a[0] * big_w[1]) * inv_w;
-                a[2] = (n[2] - a[0] * big_w[2]) * inv_w;
-            }
-            if order >= 2 {
-                a[3] = (n[3] - 2.0 * a[1] * big_w[1] - a[0] * big_w[3]) * inv_w;
-                a[4] = (n[4] - a[1] * big_w[2] - a[2] * big_w[1] - a[0] * big_w[4]) * inv_w;
-                a[5] = (n[5] - 2.0 * a[2] * big_w[2] - a[0] * big_w[5]) * inv_w;
-            }
+            let a = quotient_rule(&n, &big_w, inv_w, order);
             let w = self.weights[out.indices[l]];
             out.a[l] = a;
             out.r[l] = a.map(|x| w * x);
@@ -784,18 +774,6 @@ pub fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
             })
             .collect(),
     }
-}
-
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
 #[cfg(test)]

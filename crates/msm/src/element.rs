@@ -154,19 +154,27 @@ impl LinearElement {
     }
 }
 
-/// Spacings `h(a) = t_{a+1} − t_a` and dual spacings `τ(a)` (one-sided at the ends) of the
-/// parameters `t`.
-fn spacings(t: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let h: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+/// The dual spacing `τ(a) = ½ (h(a−1) + h(a))` of the parameters `t`, `h(a) = t_{a+1} − t_a`
+/// (one-sided at the ends); a single parameter has unit extent, so that the constants and
+/// masses of a chain are per unit length.
+pub fn dual_spacing(t: &[f64]) -> Vec<f64> {
     let n = t.len();
-    let tau = (0..n)
+    if n == 1 {
+        return vec![1.0];
+    }
+    (0..n)
         .map(|a| {
-            let left = if a > 0 { h[a - 1] } else { 0.0 };
-            let right = if a + 1 < n { h[a] } else { 0.0 };
+            let left = if a > 0 { t[a] - t[a - 1] } else { 0.0 };
+            let right = if a + 1 < n { t[a + 1] - t[a] } else { 0.0 };
             0.5 * (left + right)
         })
-        .collect();
-    (h, tau)
+        .collect()
+}
+
+/// Spacings `h(a) = t_{a+1} − t_a` and dual spacings `τ(a)` ([`dual_spacing`]) of the
+/// parameters `t`.
+fn spacings(t: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    (t.windows(2).map(|w| w[1] - w[0]).collect(), dual_spacing(t))
 }
 
 /// The elements of `kinds` on the tensor grid of parameters `us × vs` (node `a = i·n_v + j`;
@@ -182,8 +190,6 @@ pub(crate) fn grid_elements(
     let (n_u, n_v) = (us.len(), vs.len());
     let (hu, tu) = spacings(us);
     let (hv, tv) = spacings(vs);
-    // A chain has unit extent across it, so that its constants are per unit length.
-    let tv: Vec<f64> = if n_v == 1 { vec![1.0] } else { tv };
     let idx = |i: usize, j: usize| i * n_v + j;
     let mut out = Vec::new();
     let mut push = |kind: LinearKind, nodes: Vec<usize>, coefficients: Vec<f64>, weight: f64| {

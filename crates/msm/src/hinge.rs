@@ -20,6 +20,7 @@
 //! `Σ_e (θ_e − θ̄_e)² |ē_e| / h̄_e`, when `k w = 2 k_B |ē| / h̄`: the weight carries the
 //! geometry of the rest mesh, the class constant the material.
 
+use nurbspring_geom::cross;
 use serde::{Deserialize, Serialize};
 
 use crate::spring::{norm, sub};
@@ -106,15 +107,6 @@ pub(crate) struct HingeAngle {
 #[inline(always)]
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-#[inline(always)]
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 #[inline(always)]

@@ -71,7 +71,7 @@ mod stiffness;
 mod topology;
 
 pub use constants::{Class, Constants};
-pub use element::{LinearElement, LinearKind, Region};
+pub use element::{LinearElement, LinearKind, Region, dual_spacing};
 pub use error::MsmError;
 pub use file::{ElementRecord, FileSimulation, HingeRecord, MsmFile, NodeRecord, SpringRecord};
 pub use hinge::{Hinge, HingeKind};

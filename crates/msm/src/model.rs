@@ -16,8 +16,8 @@ use std::sync::OnceLock;
 
 use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::{
-    ConfigurationDamping, DofMap, DynamicModel, FusedStep, IntegratorKind, StabilityLimit, State,
-    SystemMatrix, stability_limit,
+    ConfigurationDamping, DofMap, DynamicModel, FusedStep, IntegratorKind, PointDofs,
+    StabilityLimit, State, SystemMatrix, stability_limit,
 };
 
 use crate::grid::GridStep;
@@ -97,7 +97,7 @@ impl MsmModel {
         let q0 = dof_map.restrict(&x0);
         let linear = (!lattice.elements.is_empty()).then(|| {
             let l = lattice.linear_matrix(None);
-            l.submatrix(free_nodes, free_nodes).kron_identity(3)
+            PointDofs::XYZ.expand(&l.submatrix(free_nodes, free_nodes))
         });
         let grid_step = GridStep::new(&lattice, &external);
         Ok(Self {
@@ -188,10 +188,12 @@ impl MsmModel {
             Class::Spring(_) | Class::Hinge(_) => self.assemble(q, &Coefficient::Unit(class)),
             Class::Linear(..) => {
                 let free = self.free_nodes();
-                self.lattice
-                    .linear_matrix(Some(class))
-                    .submatrix(free, free)
-                    .kron_identity(3)
+                PointDofs::XYZ.expand(
+                    &self
+                        .lattice
+                        .linear_matrix(Some(class))
+                        .submatrix(free, free),
+                )
             }
         }
     }

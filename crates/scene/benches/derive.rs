@@ -20,7 +20,7 @@ fn bench(c: &mut Criterion) {
             let scene = Scene::from_str(&text, "sheet33.toml").unwrap();
             let (method, _) = scene.derivation();
             let config = scene.derivation_config(Some(method)).unwrap();
-            nurbspring_derive::derive_linear(&config, None).unwrap()
+            nurbspring_derive::derive(&config, None, &mut |_, _| {}).unwrap()
         })
     });
     group.finish();

@@ -3,7 +3,8 @@
 //! [`Error::Model`] naming the file and, where one caused it, the key.
 
 use nurbspring_derive::{
-    Config, FitOptions, InitialConditions, MassChoice, Method, SpringsConfig, TimeSettings,
+    Config, ElementClasses, FitOptions, InitialConditions, MassChoice, Method, SpringsConfig,
+    TimeSettings,
 };
 use nurbspring_dnurbs::{
     Constraints, DnurbsModel, EdgeCondition, EdgeConstraint, EdgeLoad, Geometry, LinearConstraint,
@@ -64,7 +65,7 @@ pub fn spring_constants(m: &MsmSpec) -> Constants {
 /// elements of `elements` (both regions, unit constants) for the others; on a curve only the
 /// kinds along u.
 pub fn element_classes(m: &MsmSpec, method: Method, curve: bool) -> Constants {
-    if method == Method::Paper {
+    if method.element_classes() == ElementClasses::Springs {
         return spring_constants(m);
     }
     let kinds: Vec<LinearKind> = match &m.elements {
@@ -136,17 +137,16 @@ impl Scene {
     /// needs the tension plate.
     pub(crate) fn tension_plate(&self, what: &str) -> Result<&Material, Error> {
         self.material.tension_plate().ok_or_else(|| {
-            self.model_error(
+            Error::refused(
+                &self.path,
                 Some("material.model"),
-                nurbspring_derive::DeriveError::InvalidOption {
-                    name: "material",
-                    value: "\"kirchhoff-love\"".to_string(),
-                    reason: format!(
-                        "{what} works on tension-plate scenes (the paper's energy); the \
-                         Kirchhoff–Love shell runs with check, steady, modes, matrices, simulate \
-                         --model dnurbs, eval, export and refine"
-                    ),
-                },
+                "material",
+                "\"kirchhoff-love\"",
+                format!(
+                    "{what} works on tension-plate scenes (the paper's energy); the \
+                     Kirchhoff–Love shell runs with check, steady, modes, matrices, simulate \
+                     --model dnurbs, eval, export and refine"
+                ),
             )
         })
     }
@@ -339,16 +339,14 @@ impl Scene {
     /// tension-plate scene.
     pub fn springs_config(&self) -> Result<SpringsConfig, Error> {
         let Some(shell) = self.material.shell() else {
-            return Err(self.model_error(
+            return Err(Error::refused(
+                &self.path,
                 Some("material.model"),
-                nurbspring_derive::DeriveError::InvalidOption {
-                    name: "material",
-                    value: "the tension plate".to_string(),
-                    reason: "the spring derivation derives from a Kirchhoff–Love shell: \
-                             material.model = \"kirchhoff-love\" with young, poisson, \
-                             thickness and density"
-                        .to_string(),
-                },
+                "material",
+                "the tension plate",
+                "the spring derivation derives from a Kirchhoff–Love shell: material.model = \
+                 \"kirchhoff-love\" with young, poisson, thickness and density"
+                    .to_string(),
             ));
         };
         let surface = self.to_surface()?;

@@ -37,7 +37,7 @@ pub enum Error {
     },
     /// Building or running a model of the scene (or msm.json) at `path` failed; `key` is the
     /// scene key or option that caused it, when known.
-    #[error("{}: {}{source}", path.display(), key.as_ref().map(|k| format!("{k}: ")).unwrap_or_default())]
+    #[error("{}: {}{}", path.display(), key.as_ref().map(|k| format!("{k}: ")).unwrap_or_default(), crate::keys::message(source))]
     Model {
         /// The scene or msm.json file.
         path: PathBuf,
@@ -45,6 +45,21 @@ pub enum Error {
         key: Option<String>,
         /// The model's error.
         source: Box<DeriveError>,
+    },
+    /// A value of the scene (or msm.json) at `path` that a model refuses: `name` is the key
+    /// (or option) holding it; `key`, when given, the one that caused it.
+    #[error("{}: {}{name} = {value}: {reason}", path.display(), key.as_ref().map(|k| format!("{k}: ")).unwrap_or_default())]
+    Refused {
+        /// The scene or msm.json file.
+        path: PathBuf,
+        /// The key or option behind it.
+        key: Option<String>,
+        /// The key or option holding the value.
+        name: String,
+        /// The value.
+        value: String,
+        /// Why it is refused.
+        reason: String,
     },
     /// The job would need more memory or write more than its limits allow (refused before
     /// anything is allocated; [`crate::resources`]).
@@ -104,6 +119,7 @@ impl Error {
         match self {
             Error::Scene(_)
             | Error::Option { .. }
+            | Error::Refused { .. }
             | Error::Resources { .. }
             | Error::Missing { .. }
             | Error::Exchange { .. } => ErrorKind::Input,
@@ -114,7 +130,8 @@ impl Error {
         }
     }
 
-    /// A model error of the file `path`, caused by `key` when known.
+    /// A model error of the file `path`, caused by `key` when known; an input a derivation
+    /// refuses is named by its scene key ([`crate::keys::refusal`]).
     pub fn model(
         path: impl Into<PathBuf>,
         key: Option<&str>,
@@ -124,10 +141,30 @@ impl Error {
         if matches!(source, DeriveError::Cancelled) {
             return Error::Cancelled;
         }
+        if let Some((name, value, reason)) = crate::keys::refusal(&source) {
+            return Error::refused(path, key, name, value, reason);
+        }
         Error::Model {
             path: path.into(),
             key: key.map(str::to_string),
             source: Box::new(source),
+        }
+    }
+
+    /// A value of the file `path` that a model refuses.
+    pub fn refused(
+        path: impl Into<PathBuf>,
+        key: Option<&str>,
+        name: &str,
+        value: impl std::fmt::Display,
+        reason: impl Into<String>,
+    ) -> Self {
+        Error::Refused {
+            path: path.into(),
+            key: key.map(str::to_string),
+            name: name.to_string(),
+            value: value.to_string(),
+            reason: reason.into(),
         }
     }
 

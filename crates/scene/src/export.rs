@@ -335,6 +335,45 @@ impl TessellationFormat {
     }
 }
 
+/// The point of `geometry` at `params` (`[u, v]`, a curve `[u]`) and its derivatives up to
+/// `order` (at most 2), as `eval` prints it: `{"u", "v", "point", "d": {"u", "v", "uu", "uv",
+/// "vv"}}`.
+pub fn point_json(
+    geometry: &Geometry,
+    params: &[f64],
+    order: usize,
+) -> Result<serde_json::Value, nurbspring_geom::GeomError> {
+    use serde_json::json;
+    Ok(match geometry {
+        Geometry::Surface(s) => {
+            let d = s.derivatives(params[0], params[1], order)?;
+            let mut entry = json!({"u": params[0], "v": params[1], "point": d.point});
+            if order >= 1 {
+                let mut dd = json!({"u": d.u, "v": d.v});
+                if order >= 2 {
+                    dd["uu"] = json!(d.uu);
+                    dd["uv"] = json!(d.uv);
+                    dd["vv"] = json!(d.vv);
+                }
+                entry["d"] = dd;
+            }
+            entry
+        }
+        Geometry::Curve(c) => {
+            let d = c.derivatives(params[0], order)?;
+            let mut entry = json!({"u": params[0], "point": d.point});
+            if order >= 1 {
+                let mut dd = json!({"u": d.u});
+                if order >= 2 {
+                    dd["uu"] = json!(d.uu);
+                }
+                entry["d"] = dd;
+            }
+            entry
+        }
+    })
+}
+
 /// The surface on an `nu × nv` uniform parameter grid (a curve: `nu` points) written to
 /// `out` in `format` (a curve has no `.vts`: it is written as `.vtu`).
 pub fn write_tessellation(
@@ -541,29 +580,6 @@ pub fn write_steady(
         &["x", "y", "z"]
     };
     write_csv(out.join("steady.csv"), header, rows)?;
-    Ok(())
-}
-
-/// `load_path.csv`: the load factor λ and each probe's displacement at every recorded level of
-/// a steady state's path, columns `lambda, probe<k>_dx[u=…;v=…], …_dy, …_dz`.
-pub fn write_load_path(out: &Path, steady: &crate::run::Steady) -> Result<(), Error> {
-    let mut header = vec!["lambda".to_string()];
-    for (k, probe) in steady.probes.iter().enumerate() {
-        for c in ["dx", "dy", "dz"] {
-            header.push(format!(
-                "probe{k}_{c}[u={};v={}]",
-                nurbspring_io::output::format_f64(probe.u),
-                nurbspring_io::output::format_f64(probe.v)
-            ));
-        }
-    }
-    let header: Vec<&str> = header.iter().map(String::as_str).collect();
-    let rows = steady.path.iter().map(|level| {
-        std::iter::once(level.lambda)
-            .chain(level.displacements.iter().flat_map(|d| d.iter().copied()))
-            .collect::<Vec<f64>>()
-    });
-    write_csv(out.join("load_path.csv"), &header, rows)?;
     Ok(())
 }
 

@@ -6,7 +6,7 @@
 //! The format is chosen by the file's extension ([`GeometryFormat::from_path`]). Every error
 //! names the file and, where the format has lines, the line ([`nurbspring_exchange::Location`]).
 
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 use nurbspring_exchange::{ExchangeError, Shape, geomdl, iges, obj};
 use nurbspring_geom::{NurbsCurve, NurbsSurface};
@@ -384,6 +384,43 @@ pub enum GeometrySource {
     },
 }
 
+/// The path of `file` as a scene at `scene` should write it: relative to the scene's folder
+/// when both can be resolved, else absolute.
+pub fn relative_to_scene(file: &Path, scene: &Path) -> String {
+    let absolute = |p: &Path| std::path::absolute(p).ok();
+    let dir = scene
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let (Some(file_abs), Some(dir_abs)) = (absolute(file), absolute(dir)) else {
+        return file.display().to_string();
+    };
+    fn normal(p: &Path) -> Vec<Component<'_>> {
+        p.components()
+            .filter(|c| !matches!(c, Component::CurDir))
+            .collect()
+    }
+    let (f, d) = (normal(&file_abs), normal(&dir_abs));
+    if f.iter()
+        .chain(&d)
+        .any(|c| matches!(c, Component::ParentDir))
+    {
+        return file_abs.display().to_string();
+    }
+    let common = f.iter().zip(&d).take_while(|(a, b)| a == b).count();
+    if common == 0 {
+        return file_abs.display().to_string();
+    }
+    let mut rel = PathBuf::new();
+    for _ in common..d.len() {
+        rel.push("..");
+    }
+    for c in &f[common..] {
+        rel.push(c.as_os_str());
+    }
+    rel.to_string_lossy().replace('\\', "/")
+}
+
 /// A commented scene for an imported surface or curve: its geometry (inline or linked), and
 /// default material, loads, constraints, simulation, lattice and fit tables to edit. `origin`
 /// says where the shape came from (a line of the header comment).
@@ -481,6 +518,28 @@ pub struct Refinement {
     pub insert_v: Vec<f64>,
     /// Target degrees `(p, q)` (curves: `(p, _)`), each at least the current one.
     pub degrees: Option<(usize, Option<usize>)>,
+}
+
+impl GeometrySpec {
+    /// The net's size and degrees, in words: `4 x 3 control points, degrees 3,2`.
+    pub fn describe(&self) -> String {
+        match self {
+            GeometrySpec::Surface(s) => format!(
+                "{} x {} control points, degrees {},{}",
+                s.n_u(),
+                s.n_v(),
+                s.degree_u,
+                s.degree_v
+            ),
+            GeometrySpec::Curve(c) => {
+                format!(
+                    "{} control points, degree {}",
+                    c.control_points.len(),
+                    c.degree
+                )
+            }
+        }
+    }
 }
 
 /// The scene with its geometry refined exactly (The NURBS Book A5.9/A5.10 degree elevation, then

@@ -34,12 +34,15 @@
 //! ```
 
 mod build;
+mod derivation;
 mod error;
 pub mod export;
 pub mod geometry_file;
+pub mod keys;
 pub mod markdown;
 pub mod msm_export;
 pub mod msm_file;
+pub mod paper;
 mod parse;
 pub mod report;
 pub mod resources;
@@ -49,10 +52,23 @@ mod scene_error;
 pub mod spec;
 pub mod springs_report;
 pub mod summary;
+mod text_file;
 mod validate;
 
 pub use build::{MsmOverrides, spring_constants};
+pub use derivation::{DERIVATION_KEY, DerivationChoice, PreparedDerivation};
 pub use error::Error;
 pub use scene::{MAX_FILE_BYTES, PAPER_SCENE};
 pub use scene_error::{Problem, SceneError, SceneErrorKind};
 pub use spec::*;
+
+// The model types the command line and the bindings name: they reach the crates below only
+// through this one.
+pub use nurbspring_derive::paper::PaperReport;
+pub use nurbspring_derive::{Derivation, Method, Trajectory};
+pub use nurbspring_dnurbs::{Geometry, integrator_names};
+pub use nurbspring_exchange::Shape;
+pub use nurbspring_geom::{CurveDerivatives, GeomError, SurfaceDerivatives};
+pub use nurbspring_linalg::SparseMatrix;
+pub use nurbspring_msm::{Class, Constants, SpringKind};
+pub use nurbspring_sim::{ErrorKind, IntegratorKind, RunSummary, Schedule};

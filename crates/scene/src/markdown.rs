@@ -52,7 +52,7 @@ pub fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> 
         s,
         "# nurbspring derivation report\n\n{}\n\nScene: `{scene_label}`; derivation: `{}`\n",
         verdict(&d.regime),
-        d.method.name()
+        d.method().name()
     );
     if !d.warnings.is_empty() {
         let _ = writeln!(s, "## Warnings\n");

@@ -10,7 +10,8 @@ use nurbspring_msm::{FileSimulation, MsmFile, MsmModel, SpringLattice};
 use nurbspring_sim::{IntegratorKind, State};
 
 use crate::build::MsmOverrides;
-use crate::scene::read_text;
+use crate::resources::{Job, Limits, Timing, format_bytes};
+use crate::text_file::read_text;
 use crate::{Error, Scene};
 
 /// Largest `msm.json` read (256 MiB: a lattice of a few million nodes).
@@ -64,6 +65,43 @@ pub fn load_msm(
     } else {
         Scene::from_path(path)?.msm_setup(overrides)
     }
+}
+
+/// [`load_msm`], refused before anything is allocated when its estimate exceeds `limits`:
+/// an msm.json by its size, a scene by its [`Job::SimulateMsm`] estimate (`run`: the output
+/// folder and the timing of a simulation).
+pub fn load_msm_within(
+    path: &Path,
+    overrides: &MsmOverrides,
+    flag: &dyn Fn(&str) -> String,
+    limits: &Limits,
+    run: Option<(&Path, Timing)>,
+) -> Result<MsmSetup, Error> {
+    if is_msm_file(path) {
+        // The model of an msm.json is built from the parsed file: its peak is proportional
+        // to the file's size (31 bytes a byte measured on a 10⁶-node chain; 40 allowed).
+        if let Ok(meta) = std::fs::metadata(path) {
+            let need = (64u64 << 20).saturating_add(meta.len().saturating_mul(40));
+            if need > limits.memory {
+                return Err(Error::Resources {
+                    path: path.to_path_buf(),
+                    key: "(file size)".to_string(),
+                    message: format!(
+                        "a model of {} of msm.json needs an estimated {} of memory, above the limit of {} (raise it with --max-memory)",
+                        format_bytes(meta.len()),
+                        format_bytes(need),
+                        format_bytes(limits.memory)
+                    ),
+                });
+            }
+        }
+        return load_msm(path, overrides, flag);
+    }
+    overrides.validate(flag)?;
+    let scene = Scene::from_path(path)?;
+    let (out, timing) = run.map_or((None, Timing::default()), |(o, t)| (Some(o), t));
+    scene.check_resources(Job::SimulateMsm(timing), limits, out)?;
+    scene.msm_setup(overrides)
 }
 
 /// Reads an msm.json file (a regular file of at most [`MAX_MSM_FILE_BYTES`]).

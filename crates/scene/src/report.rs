@@ -101,7 +101,7 @@ impl<'a> Report<'a> {
     ) -> Self {
         Self {
             scene: scene_label,
-            derivation: d.method,
+            derivation: d.method(),
             inputs: Inputs {
                 material: &scene.material,
                 loads: scene.build_loads(),
@@ -240,7 +240,7 @@ fn run_settings(scene: &Scene, d: &Derivation) -> FileSimulation {
 /// The `msm.json` of a derivation with a lattice (`None` for a node reduction): the lattice,
 /// the scene it came from, its initial velocities and the run settings it was validated with.
 pub fn derived_msm_file(scene_label: &str, scene: &Scene, d: &Derivation) -> Option<MsmFile> {
-    d.lattice.as_ref().map(|lattice| {
+    d.lattice().map(|lattice| {
         msm_file(
             lattice,
             scene_label,
@@ -287,13 +287,13 @@ pub fn write_derived_files_with(
     d: &Derivation,
     extra: &[(String, &Trajectory)],
 ) -> Result<(), Error> {
-    if let Some(lattice) = &d.lattice {
+    if let Some(lattice) = d.lattice() {
         let msm = derived_msm_file(scene_label, scene, d).expect("the derivation has a lattice");
         write_json(out.join("msm.json"), &msm)?;
         write_lattice_obj(&out.join("lattice.obj"), lattice)?;
         write_lattice_vtu(&out.join("lattice.vtu"), lattice)?;
     }
-    if let Some(r) = &d.reduction {
+    if let Some(r) = d.reduction() {
         write_json(
             out.join("reduction.json"),
             &reduction_file(scene_label, r, &d.node_velocities),
@@ -403,6 +403,73 @@ fn energy_series(name: &str, traj: &Trajectory) -> Vec<Series> {
     ]
 }
 
+/// The result line of `derive`: what was derived, its constants and masses, the explicit
+/// step limit and the validation.
+pub fn derivation_line(derivation: &Derivation) -> String {
+    let d = &derivation.derived;
+    // What was derived: an MSM, or the exact reduction (a linear model, not an MSM).
+    let what = match derivation.method() {
+        Method::Reduction => format!(
+            "exact reduction onto {} free nodes (reduction.json: a linear node-space model, not an MSM; the reference an MSM is judged against)",
+            derivation.reduction().map_or(0, |r| r.free.len())
+        ),
+        m => format!("derived MSM ({})", m.name()),
+    };
+    let mut parts = Vec::new();
+    let constants = constants_text(&d.constants, 6);
+    if !constants.is_empty() {
+        parts.push(constants);
+    }
+    parts.push(mass_text(derivation, d.m));
+    format!(
+        "{what}: {}; dt_critical = {:.5}; central node rel. RMS = {} over {:.3} s ({}), second excitation {:.4}",
+        parts.join(", "),
+        d.dt_critical,
+        if d.validation.relative_rms.is_nan() {
+            "n/a".to_string()
+        } else {
+            format!("{:.4}", d.validation.relative_rms)
+        },
+        d.validation.horizon,
+        d.validation.integrator,
+        derivation.second_excitation.relative_rms
+    )
+}
+
+/// The node masses of a derivation's result: one `m` when every free node has it, else their
+/// range and mean (the linear derivations fit one mass per node); the reduction's total.
+fn mass_text(derivation: &Derivation, m: f64) -> String {
+    let free: Vec<f64> = match derivation.lattice() {
+        Some(l) => l
+            .masses
+            .iter()
+            .zip(&l.fixed)
+            .filter(|(_, f)| !**f)
+            .map(|(m, _)| *m)
+            .collect(),
+        None => {
+            return format!(
+                "free mass {:.6} (M_T, against the D-NURBS's {:.6})",
+                derivation.mass.free_msm, derivation.mass.free_dnurbs
+            );
+        }
+    };
+    let (lo, hi) = free
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    if free.is_empty() || lo == hi {
+        format!("m = {m:.6}")
+    } else {
+        format!(
+            "node masses {lo:.6} to {hi:.6} (mean {:.6} over {} free nodes)",
+            free.iter().sum::<f64>() / free.len() as f64,
+            free.len()
+        )
+    }
+}
+
 /// How a parameter set's validation run was made, as the figures say it: the integrator, its
 /// substeps when an explicit scheme was kept below its stability limit, and what plain steps
 /// did (`symplectic-euler in 3 substeps of dt/3 (plain steps diverge)`).
@@ -454,7 +521,7 @@ fn write_plots(
         Series::line(
             format!(
                 "MSM of the {} derivation: {}",
-                d.method.name(),
+                d.method().name(),
                 how_run(&d.derived)
             ),
             xy(&d.msm_trajectory.t, &d.msm_trajectory.component(0, axis)),
@@ -516,7 +583,7 @@ fn write_plots(
     };
     let shown = |v: &[f64]| v[..v.len().min(SPECTRUM_SHOWN)].to_vec();
     let (spectrum_dnurbs, spectrum_msm) = (shown(&d.spectrum.dnurbs), shown(&d.spectrum.msm));
-    let msm_name = format!("MSM of the {} derivation", d.method.name());
+    let msm_name = format!("MSM of the {} derivation", d.method().name());
 
     let mut jobs: Vec<PlotJob<'_>> = Vec::new();
     for ext in ["svg", "png"] {

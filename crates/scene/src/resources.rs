@@ -197,6 +197,64 @@ pub fn free_space(path: &Path) -> Option<u64> {
     }
 }
 
+impl Scene {
+    /// What `check` reports of the resources: each job's estimate (memory, output, frames)
+    /// and whether it is within `limits`, and the limits.
+    pub fn resources_json(&self, limits: &Limits) -> serde_json::Value {
+        let (method, _) = self.derivation();
+        let mut resources = serde_json::Map::new();
+        for (name, job) in [
+            ("derive", Job::Derive(method)),
+            ("simulate_dnurbs", Job::SimulateDnurbs(Timing::default())),
+            ("simulate_msm", Job::SimulateMsm(Timing::default())),
+            ("modes_steady", Job::Factorize),
+        ] {
+            let e = self.estimate(job);
+            resources.insert(
+                name.to_string(),
+                serde_json::json!({
+                    "memory_bytes": e.memory,
+                    "memory": format_bytes(e.memory),
+                    "output_bytes": e.output,
+                    "frames": e.frames,
+                    "within_limits": e.memory <= limits.memory && e.output <= limits.output,
+                }),
+            );
+        }
+        resources.insert(
+            "limits".to_string(),
+            serde_json::json!({"memory_bytes": limits.memory, "output_bytes": limits.output}),
+        );
+        serde_json::Value::Object(resources)
+    }
+}
+
+/// A byte count: digits with an optional unit K, M, G or T (powers of 1024; `B`, `iB` allowed).
+pub fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let upper = t.to_ascii_uppercase();
+    let body = upper
+        .strip_suffix("IB")
+        .or_else(|| upper.strip_suffix('B'))
+        .unwrap_or(&upper);
+    let (digits, shift) = match body.chars().last() {
+        Some('K') => (&body[..body.len() - 1], 10),
+        Some('M') => (&body[..body.len() - 1], 20),
+        Some('G') => (&body[..body.len() - 1], 30),
+        Some('T') => (&body[..body.len() - 1], 40),
+        _ => (body, 0),
+    };
+    let x: f64 = digits
+        .trim()
+        .parse()
+        .map_err(|_| format!("{t:?} is not a size (bytes, or a number with K, M, G or T)"))?;
+    let bytes = x * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("{t:?} is not a size between 1 byte and 16 EiB"));
+    }
+    Ok(bytes as u64)
+}
+
 /// Bytes as text: "3.2 GiB", "640 MiB", "12 KiB".
 pub fn format_bytes(b: u64) -> String {
     let b = b as f64;
@@ -268,11 +326,7 @@ impl Scene {
     /// Lattice nodes along u and v for `method`'s default grid (or the scene's), from the
     /// scene's numbers alone.
     fn lattice_nodes(&self, method: Method) -> (f64, f64) {
-        let grid = self.msm.grid.unwrap_or(if method == Method::Paper {
-            LatticeGrid::Knots
-        } else {
-            LatticeGrid::Greville
-        });
+        let grid = self.msm.grid_for(method);
         match (&self.geometry, grid) {
             (GeometrySpec::Surface(s), LatticeGrid::Knots) => {
                 (distinct(&s.knots_u), distinct(&s.knots_v))
@@ -398,7 +452,7 @@ impl Scene {
                 // lowest TRUNCATED_MODES of each model instead (shift-invert Lanczos: its
                 // basis of 3r + 60 vectors, the modes, the factor of K − σM).
                 let scalar = n.max(nodes);
-                let truncated = matches!(method, Method::Modal | Method::Excitation)
+                let truncated = method.linear().is_some_and(|m| m.is_fitted())
                     && scalar > nurbspring_derive::DENSE_MODES as f64;
                 if truncated {
                     let r = nurbspring_derive::TRUNCATED_MODES as f64;

@@ -74,6 +74,49 @@ pub struct Simulated {
     pub probe_labels: Vec<String>,
 }
 
+impl Simulated {
+    /// What `simulate --json` prints: the settings the run used and what it wrote (`model`:
+    /// `dnurbs` or `msm`).
+    pub fn summary_json(&self, model: &str, summary: &RunSummary, out: &Path) -> serde_json::Value {
+        let mut v = serde_json::json!({
+            "model": model,
+            "integrator": self.integrator.name(),
+            "substeps": self.substeps,
+            "dt": self.dt,
+            "t_end": self.t_end,
+            "steps": summary.steps,
+            "t_final": summary.t_final,
+            "halved_steps": summary.halved_steps,
+            "samples": self.trajectory.t.len(),
+            "frames": self.frames.len(),
+            "pvd": self.pvd,
+            "vtk_every": self.vtk_every,
+            "warnings": self.warnings,
+            "out": out.display().to_string(),
+        });
+        if let (Some(s), serde_json::Value::Object(map)) = (self.stability, &mut v) {
+            map.insert("omega_max".into(), serde_json::json!(s.omega_max));
+            map.insert("dt_critical".into(), serde_json::json!(s.dt_critical));
+        }
+        v
+    }
+
+    /// The result line of `simulate` (`model`: `D-NURBS` or `MSM`).
+    pub fn result_line(&self, model: &str, summary: &RunSummary, out: &Path) -> String {
+        format!(
+            "{model} run ({}, {} steps, {} samples, {} ParaView frames) written to {}",
+            Schedule {
+                integrator: self.integrator,
+                substeps: self.substeps
+            },
+            summary.steps,
+            self.trajectory.t.len(),
+            self.frames.len(),
+            out.display()
+        )
+    }
+}
+
 /// The label of a probe at `(u, v)` (`v` left out on a curve, `node` for an MSM's node).
 pub fn probe_label(node: Option<usize>, uv: Option<(f64, f64)>, curve: bool) -> String {
     let mut parts = Vec::new();
@@ -151,15 +194,7 @@ fn integrator_error(
     if request.integrator.is_some() {
         Error::option("--integrator", integrator, reason)
     } else {
-        Error::model(
-            path,
-            Some(key),
-            DeriveError::InvalidOption {
-                name: "integrator",
-                value: integrator.to_string(),
-                reason,
-            },
-        )
+        Error::refused(path, Some(key), "integrator", integrator, reason)
     }
 }
 
@@ -746,4 +781,27 @@ pub fn steady_state(
         probes,
         path,
     })
+}
+
+/// `load_path.csv`: the load factor λ and each probe's displacement at every recorded level of
+/// a steady state's path, columns `lambda, probe<k>_dx[u=…;v=…], …_dy, …_dz`.
+pub fn write_load_path(out: &Path, steady: &Steady) -> Result<(), Error> {
+    let mut header = vec!["lambda".to_string()];
+    for (k, probe) in steady.probes.iter().enumerate() {
+        for c in ["dx", "dy", "dz"] {
+            header.push(format!(
+                "probe{k}_{c}[u={};v={}]",
+                nurbspring_io::output::format_f64(probe.u),
+                nurbspring_io::output::format_f64(probe.v)
+            ));
+        }
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    let rows = steady.path.iter().map(|level| {
+        std::iter::once(level.lambda)
+            .chain(level.displacements.iter().flat_map(|d| d.iter().copied()))
+            .collect::<Vec<f64>>()
+    });
+    write_csv(out.join("load_path.csv"), &header, rows)?;
+    Ok(())
 }

@@ -28,13 +28,13 @@
 //! assert_eq!(err.to_string(), "x.toml: material.mu = -2: the mass density must be positive");
 //! ```
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use nurbspring_dnurbs::{DnurbsOptions, MaterialModel};
 use serde::Serialize;
 
 use crate::spec::*;
+use crate::text_file::read_text;
 use crate::{Problem, SceneError, parse, validate};
 
 /// The paper's experiment (Section IV), the same text as `examples/paper.toml`.
@@ -190,54 +190,4 @@ impl CurveSpec {
             problems: vec![p],
         })
     }
-}
-
-/// Reads a text file of at most `limit` bytes through its handle: regular files only, at most
-/// `limit + 1` bytes read, UTF-8 required. `what` names the file in messages ("scene").
-pub(crate) fn read_text(path: &Path, limit: u64, what: &'static str) -> Result<String, SceneError> {
-    let io = |source| SceneError::Io {
-        path: path.to_path_buf(),
-        what,
-        source,
-    };
-    let invalid = |value: String, message: String| SceneError::Invalid {
-        path: path.to_path_buf(),
-        problems: vec![Problem::new("(file)", value, message)],
-    };
-    // Opening a FIFO blocks until a writer appears: open without blocking, then check the kind
-    // through the handle.
-    let mut options = std::fs::OpenOptions::new();
-    options.read(true);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        options.custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32);
-    }
-    let file = options.open(path).map_err(io)?;
-    let meta = file.metadata().map_err(io)?;
-    if !meta.is_file() {
-        let kind = if meta.is_dir() {
-            "a folder"
-        } else {
-            "not a regular file (a FIFO, socket or device)"
-        };
-        return Err(invalid(
-            kind.to_string(),
-            format!("a {what} file must be a regular file"),
-        ));
-    }
-    let mut bytes = Vec::new();
-    file.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
-    if bytes.len() as u64 > limit {
-        return Err(invalid(
-            format!("more than {limit} bytes"),
-            format!("{what} files are limited to {limit} bytes"),
-        ));
-    }
-    String::from_utf8(bytes).map_err(|e| {
-        invalid(
-            format!("invalid UTF-8 at byte {}", e.utf8_error().valid_up_to()),
-            format!("a {what} file must be UTF-8 text"),
-        )
-    })
 }

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use nurbspring_derive::{FitDofs, FitMethod, Method};
 use nurbspring_dnurbs::{DnurbsOptions, Edge, MaterialModel};
-use nurbspring_msm::LinearKind;
+use nurbspring_msm::{LinearKind, ParameterGrid};
 use nurbspring_sim::IntegratorKind;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::ser::Serializer;
@@ -462,13 +462,11 @@ impl MsmSpec {
             .unwrap_or_else(|| material.damping_per_mass() * m)
     }
 
-    /// The grid a derivation uses: the scene's, else the distinct knots for the paper's and
-    /// the Greville abscissae for the others.
+    /// The grid a derivation uses: the scene's, else the method's own
+    /// ([`Method::default_grid`]).
     pub fn grid_for(&self, method: Method) -> LatticeGrid {
-        self.grid.unwrap_or(match method {
-            Method::Paper => LatticeGrid::Knots,
-            _ => LatticeGrid::Greville,
-        })
+        self.grid
+            .unwrap_or_else(|| LatticeGrid::of(&method.default_grid()))
     }
 }
 
@@ -507,6 +505,15 @@ pub enum LatticeGrid {
 }
 
 impl LatticeGrid {
+    /// The scene's name for a lattice's parameter grid.
+    pub fn of(grid: &ParameterGrid) -> LatticeGrid {
+        match grid {
+            ParameterGrid::Knots => LatticeGrid::Knots,
+            ParameterGrid::Uniform { .. } => LatticeGrid::Uniform,
+            ParameterGrid::Greville => LatticeGrid::Greville,
+        }
+    }
+
     /// `"knots"`, `"uniform"` or `"greville"`.
     pub fn name(self) -> &'static str {
         match self {
@@ -877,30 +884,4 @@ pub(crate) struct RawInitial {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Without `vtk_every` the frame count ⌈samples / n⌉ is at most 200, with the smallest n.
-    #[test]
-    fn default_frame_every_keeps_at_most_200_frames() {
-        for (samples, every, frames) in [
-            (0, 1, 0),
-            (1, 1, 1),
-            (200, 1, 200),
-            (201, 2, 101),
-            (2001, 11, 182),
-            (40_001, 201, 200),
-        ] {
-            let n = default_frame_every(samples);
-            assert_eq!(n, every, "{samples}");
-            assert_eq!(samples.div_ceil(n), frames, "{samples}");
-            assert!(
-                n == 1 || samples.div_ceil(n - 1) > DEFAULT_MAX_FRAMES,
-                "{samples}"
-            );
-        }
-        let set = OutputSpec { vtk_every: Some(3) };
-        assert_eq!(set.frame_every(2001), 3);
-        assert_eq!(OutputSpec::default().frame_every(2001), 11);
-    }
-}
+mod tests;

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use nurbspring_derive::{DeriveError, LARGE_MOTION, SpringsDerivation};
+use nurbspring_derive::{LARGE_MOTION, SpringsDerivation};
 use nurbspring_io::output::{write_csv, write_json};
 use nurbspring_io::plot::{PlotOptions, Series, plot_series_with};
 use nurbspring_msm::{FileSimulation, MsmFile};
@@ -23,18 +23,8 @@ pub fn derive_springs(
     cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 ) -> Result<SpringsDerivation, Error> {
     let config = scene.springs_config()?;
-    nurbspring_derive::derive_springs(&config, cancel).map_err(|e| {
-        let key = match &e {
-            DeriveError::InvalidOption { name, .. } => match *name {
-                "constraints" => Some("constraints"),
-                "moment" => Some("loads.edge"),
-                "msm.grid" => Some("msm.grid"),
-                _ => None,
-            },
-            _ => None,
-        };
-        Error::model(&scene.path, key, e)
-    })
+    nurbspring_derive::derive_springs(&config, cancel)
+        .map_err(|e| scene.derive_error(crate::derivation::DERIVATION_KEY, e))
 }
 
 /// report.json of a spring derivation.

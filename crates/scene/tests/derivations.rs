@@ -9,7 +9,7 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
-use nurbspring_derive::{Derivation, Method, ReferenceKind, derive_linear, derive_msm};
+use nurbspring_derive::{Derivation, Method, ReferenceKind};
 use nurbspring_dnurbs::DnurbsModel;
 use nurbspring_scene::Scene;
 use nurbspring_sim::{IntegratorKind, RunOptions, Sample};
@@ -31,10 +31,9 @@ fn scene(name: &str) -> Scene {
 
 fn derive(s: &Scene, method: Method) -> Derivation {
     let config = s.derivation_config(Some(method)).unwrap();
-    match method {
-        Method::Paper => derive_msm(&config, None, &mut |_, _| {}).unwrap().0,
-        _ => derive_linear(&config, None).unwrap().0,
-    }
+    nurbspring_derive::derive(&config, None, &mut |_, _| {})
+        .unwrap()
+        .0
 }
 
 /// The lowest frequency is matched by the calibration, to the eigensolver's accuracy.
@@ -79,7 +78,7 @@ fn modal_derivation_follows_the_dnurbs() {
         // The horizon covers five periods of the lowest mode, or the scene's t_end.
         assert!(v.horizon >= 5.0 * 2.0 * PI / first.dnurbs - 1e-9, "{name}");
         // A linear model: no spring, every free node with a positive mass.
-        let l = d.lattice.as_ref().unwrap();
+        let l = d.lattice().unwrap();
         assert!(l.springs.is_empty() && !l.elements.is_empty());
         // The totals add up.
         let total: f64 = l.masses.iter().sum();
@@ -183,7 +182,7 @@ fn reduction_reproduces_the_dnurbs_on_a_greville_lattice() {
             d.derived.validation.relative_rms
         );
         assert!(d.second_excitation.relative_rms <= REDUCTION, "{name}");
-        let r = d.reduction.as_ref().unwrap();
+        let r = d.reduction().unwrap();
         assert!(!r.guyan);
         for f in &d.frequencies {
             assert!(f.relative_difference.abs() <= 1e-9, "{name}: {f:?}");
@@ -210,7 +209,7 @@ fn string_frequencies() {
         "{}",
         d.derived.validation.relative_rms
     );
-    let l = d.lattice.as_ref().unwrap();
+    let l = d.lattice().unwrap();
     assert_eq!(l.grid, Some((12, 1)));
 }
 
@@ -225,7 +224,7 @@ fn damping_follows_the_dnurbs() {
     .replace("mu = 2.0", "mu = 2.0\ngamma = 0.4");
     let s = Scene::from_str(&text, "damped.toml").unwrap();
     let d = derive(&s, Method::Modal);
-    let l = d.lattice.as_ref().unwrap();
+    let l = d.lattice().unwrap();
     for (m, c) in l.masses.iter().zip(&l.damping) {
         assert!((c - 0.2 * m).abs() <= 1e-15 * m, "{c} vs {m}");
     }
@@ -267,7 +266,7 @@ fn every_derivation_carries_the_material_damping() {
     let s = Scene::from_str(&text, "damped.toml").unwrap();
     for method in Method::ALL {
         let d = derive(&s, method);
-        match (&d.lattice, &d.reduction) {
+        match (d.lattice(), d.reduction()) {
             (Some(l), _) => {
                 for (a, (m, c)) in l.masses.iter().zip(&l.damping).enumerate() {
                     assert!(
@@ -285,7 +284,7 @@ fn every_derivation_carries_the_material_damping() {
     // The scene's own msm.damping is the lattice's (examples/sheet_gravity.toml keeps 0.01).
     let given = Scene::from_str(&format!("{text}\n[msm]\ndamping = 0.05\n"), "given.toml").unwrap();
     let d = derive(&given, Method::Paper);
-    assert!(d.lattice.unwrap().damping.iter().all(|&c| c == 0.05));
+    assert!(d.lattice().unwrap().damping.iter().all(|&c| c == 0.05));
 }
 
 /// The paper's derivation keeps its constants; its validation is 3-D at the node's own point
@@ -325,9 +324,10 @@ fn derivation_refusals_name_the_key() {
     .unwrap()
     .replace("velocity = [0, 0, -0.1]", "velocity = [0, 0, 0]");
     let quiet = Scene::from_str(&text, "quiet.toml").unwrap();
-    let Err(e) = derive_linear(
-        &quiet.derivation_config(Some(Method::Excitation)).unwrap(),
+    let Err(e) = quiet.derive(
+        quiet.choose_derivation(Some((Method::Excitation, "derivation"))),
         None,
+        &mut |_, _| {},
     ) else {
         panic!("an excitation fit without excitation must be refused")
     };
@@ -342,9 +342,10 @@ fn derivation_refusals_name_the_key() {
         "[msm]\ngrid = \"uniform\"\nnodes_u = 15\nnodes_v = 12\n[initial]",
     );
     let fine = Scene::from_str(&text, "fine.toml").unwrap();
-    let Err(e) = derive_linear(
-        &fine.derivation_config(Some(Method::Reduction)).unwrap(),
+    let Err(e) = fine.derive(
+        fine.choose_derivation(Some((Method::Reduction, "derivation"))),
         None,
+        &mut |_, _| {},
     ) else {
         panic!("a reduction onto more nodes than control points must be refused")
     };
@@ -377,7 +378,7 @@ fn linear_constraints_fall_back_to_the_paper() {
     )
     .unwrap();
     assert_eq!(named.derivation(), (Method::Modal, None));
-    let Err(e) = derive_linear(&named.derivation_config(None).unwrap(), None) else {
+    let Err(e) = named.derive(named.choose_derivation(None), None, &mut |_, _| {}) else {
         panic!("the modal derivation cannot take linear constraints")
     };
     assert!(e.to_string().contains("constraints.linear"), "{e}");

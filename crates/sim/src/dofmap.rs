@@ -5,6 +5,59 @@ use nurbspring_linalg::SparseMatrix;
 
 use crate::SimError;
 
+/// How the dofs of points are laid out: the `components` coordinates of point `k` are dofs
+/// `components · k + x`, interleaved. A model whose matrices act alike on every coordinate is
+/// `S ⊗ I` in this layout, with `S` its scalar matrix over the points; this type owns that
+/// correspondence (both models' points are [`PointDofs::XYZ`]).
+///
+/// ```
+/// use nurbspring_sim::{PointDofs, SparseMatrix};
+/// let s = SparseMatrix::from_triplets(2, 2, &[(0, 0, 2.0), (0, 1, -1.0), (1, 1, 3.0)]).unwrap();
+/// let full = PointDofs::XYZ.expand(&s);
+/// assert_eq!((full.nrows(), full.get(4, 4), full.get(3, 4)), (6, 3.0, 0.0));
+/// assert_eq!(PointDofs::XYZ.dof(1, 2), 5);
+/// assert_eq!(PointDofs::XYZ.scalar_part(&full).get(0, 1), -1.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PointDofs {
+    /// Coordinates per point.
+    pub components: usize,
+}
+
+impl PointDofs {
+    /// Three coordinates per point, x, y, z.
+    pub const XYZ: PointDofs = PointDofs { components: 3 };
+
+    /// The dof of coordinate `component` of `point`.
+    pub fn dof(self, point: usize, component: usize) -> usize {
+        self.components * point + component
+    }
+
+    /// The dofs of the first coordinate of each of `n_points` points: the rows of the scalar
+    /// system.
+    pub fn scalar_rows(self, n_points: usize) -> Vec<usize> {
+        (0..n_points).map(|k| self.dof(k, 0)).collect()
+    }
+
+    /// The scalar matrix `S` of a matrix `S ⊗ I` in this layout: its entries between the
+    /// first coordinates (rows and columns).
+    pub fn scalar_part(self, a: &SparseMatrix) -> SparseMatrix {
+        let rows = self.scalar_rows(a.nrows() / self.components);
+        let cols = self.scalar_rows(a.ncols() / self.components);
+        a.submatrix(&rows, &cols)
+    }
+
+    /// `S ⊗ I`: the scalar matrix `s` acting alike on every coordinate.
+    pub fn expand(self, s: &SparseMatrix) -> SparseMatrix {
+        s.kron_identity(self.components)
+    }
+
+    /// `S` when `a` is `S ⊗ I` in this layout, else `None`.
+    pub fn scalar_factor(self, a: &SparseMatrix) -> Option<SparseMatrix> {
+        a.kron_identity_factor(self.components)
+    }
+}
+
 /// Where a dof of the full vector goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DofSlot {

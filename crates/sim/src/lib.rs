@@ -26,7 +26,7 @@ pub mod integrators;
 pub mod model;
 mod run;
 
-pub use dofmap::{DofMap, DofSlot};
+pub use dofmap::{DofMap, DofSlot, PointDofs};
 pub use error::{ErrorKind, SimError};
 pub use integrators::{NewtonSettings, Stepper, make_stepper, make_stepper_with_options};
 pub use model::{ConfigurationDamping, DynamicModel, FusedStep, LinearModel, SystemMatrix};

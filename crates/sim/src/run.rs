@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use nurbspring_linalg::largest_generalized_eigenvalue;
 
 use crate::integrators::make_stepper_with_options;
-use crate::{DynamicModel, SimError};
+use crate::{DynamicModel, PointDofs, SimError};
 
 /// Largest number of steps one run may take (10⁸): larger requests are refused up front.
 pub const MAX_STEPS: f64 = 1e8;
@@ -283,6 +283,21 @@ pub struct StabilityLimit {
     pub dt_critical: f64,
 }
 
+impl StabilityLimit {
+    /// The limit of a highest angular frequency `ω_max`: `Δt_crit = 2/ω_max`, infinite when
+    /// `ω_max` is not positive (nothing oscillates).
+    pub fn from_omega_max(omega_max: f64) -> Self {
+        Self {
+            omega_max,
+            dt_critical: if omega_max > 0.0 {
+                2.0 / omega_max
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+}
+
 /// `ω_max` of the model linearized at `q` — the square root of the largest eigenvalue of
 /// `K_T(q) φ = λ M φ`, by Lanczos ([`largest_generalized_eigenvalue`], relative tolerance 1e-8) —
 /// and `Δt_crit = 2/ω_max`, the stability limit of the central-difference family (symplectic
@@ -303,16 +318,7 @@ pub fn stability_limit(model: &dyn DynamicModel, q: &[f64]) -> Result<StabilityL
     let k = model.tangent_stiffness(q);
     let m = model.mass().to_sparse();
     let lambda = largest_generalized_eigenvalue(&k, &m, 1e-8)?.max(0.0);
-    let omega_max = lambda.sqrt();
-    let dt_critical = if omega_max > 0.0 {
-        2.0 / omega_max
-    } else {
-        f64::INFINITY
-    };
-    Ok(StabilityLimit {
-        omega_max,
-        dt_critical,
-    })
+    Ok(StabilityLimit::from_omega_max(lambda.sqrt()))
 }
 
 /// The stability limit that holds along any trajectory: `ω̄ = √λ_max(K̄ φ = λ M φ)` for the
@@ -332,20 +338,13 @@ pub fn uniform_stability_limit(
     // A bound and a mass of the form S ⊗ I₃ (a lattice's per-node masses and isotropic
     // blocks) have the eigenvalues of their factors: the pencil of the factors is a third the
     // size.
-    let lambda = match (k.kron_identity_factor(3), m.kron_identity_factor(3)) {
+    let xyz = PointDofs::XYZ;
+    let lambda = match (xyz.scalar_factor(&k), xyz.scalar_factor(&m)) {
         (Some(k3), Some(m3)) => largest_generalized_eigenvalue(&k3, &m3, 1e-8)?,
         _ => largest_generalized_eigenvalue(&k, &m, 1e-8)?,
     }
     .max(0.0);
-    let omega_max = lambda.sqrt();
-    Ok(Some(StabilityLimit {
-        omega_max,
-        dt_critical: if omega_max > 0.0 {
-            2.0 / omega_max
-        } else {
-            f64::INFINITY
-        },
-    }))
+    Ok(Some(StabilityLimit::from_omega_max(lambda.sqrt())))
 }
 
 /// Fraction of the uniform stability limit a substep may reach: the margin covers damping

@@ -4,9 +4,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use nurbspring_scene::Scene;
-use nurbspring_scene::resources::{Job, Timing, format_bytes};
+use nurbspring_scene::resources::Job;
 use nurbspring_scene::summary::summary;
-use serde_json::json;
 
 use crate::{CmdResult, Context, print_json};
 
@@ -26,37 +25,11 @@ pub fn run(ctx: &Context, args: CheckArgs) -> CmdResult {
     // The estimates come from the scene's sizes alone: computed, and a scene too large for
     // `check` itself refused, before any model is built.
     ctx.check_resources(&scene, Job::Check, None)?;
-    let (method, _) = scene.derivation();
-    let mut resources = serde_json::Map::new();
-    for (name, job) in [
-        ("derive", Job::Derive(method)),
-        ("simulate_dnurbs", Job::SimulateDnurbs(Timing::default())),
-        ("simulate_msm", Job::SimulateMsm(Timing::default())),
-        ("modes_steady", Job::Factorize),
-    ] {
-        let e = scene.estimate(job);
-        resources.insert(
-            name.to_string(),
-            json!({
-                "memory_bytes": e.memory,
-                "memory": format_bytes(e.memory),
-                "output_bytes": e.output,
-                "frames": e.frames,
-                "within_limits": e.memory <= ctx.limits.memory && e.output <= ctx.limits.output,
-            }),
-        );
-    }
-    resources.insert(
-        "limits".to_string(),
-        json!({"memory_bytes": ctx.limits.memory, "output_bytes": ctx.limits.output}),
-    );
+    let resources = scene.resources_json(&ctx.limits);
     let report = summary(&scene)?;
     let mut value = serde_json::to_value(&report).unwrap_or_default();
     if let serde_json::Value::Object(map) = &mut value {
-        map.insert(
-            "resources".to_string(),
-            serde_json::Value::Object(resources),
-        );
+        map.insert("resources".to_string(), resources);
     }
     if args.json {
         return print_json(&value);

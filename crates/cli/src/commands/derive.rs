@@ -3,9 +3,9 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use nurbspring_derive::Method;
-use nurbspring_scene::report::{constants_text, write_derivation};
-use nurbspring_scene::{Error, Scene};
+use nurbspring_scene::Method;
+use nurbspring_scene::Scene;
+use nurbspring_scene::report::{derivation_line, write_derivation};
 
 use crate::progress::Progress;
 use nurbspring_scene::resources::Job;
@@ -41,35 +41,15 @@ fn parse_method(s: &str) -> Result<Method, String> {
 /// Derives the MSM of a scene and writes every output.
 pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
-    let (method, fallback) = match args.derivation {
-        Some(m) => (m, None),
-        None => scene.derivation(),
-    };
-    ctx.check_resources(&scene, Job::Derive(method), Some(&args.out))?;
-    if method == Method::Springs {
+    let choice = scene.choose_derivation(args.derivation.map(|m| (m, "--derivation")));
+    ctx.check_resources(&scene, Job::Derive(choice.method), Some(&args.out))?;
+    if choice.method == Method::Springs {
         return run_springs(ctx, &args, &scene);
     }
-    let config = scene.derivation_config(Some(method))?;
+    let prepared = scene.prepare_derivation(choice)?;
     let staged = stage_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "mass scan", 1);
-    let cancel = Some(ctx.cancel.clone());
-    let key = if args.derivation.is_some() {
-        "--derivation"
-    } else {
-        "fit.derivation"
-    };
-    let result = match config.method {
-        Method::Paper => {
-            nurbspring_derive::derive_msm(&config, cancel, &mut |d, t| bar.update(d, t))
-        }
-        _ => nurbspring_derive::derive_linear(&config, cancel),
-    };
-    let (derivation, _) = result.map_err(|e| {
-        // An option error names its own key; other input errors are the derivation's.
-        let named = matches!(e, nurbspring_derive::DeriveError::InvalidOption { .. });
-        let input = e.kind() == nurbspring_sim::ErrorKind::Input;
-        Error::model(&scene.path, (input && !named).then_some(key), e)
-    })?;
+    let (derivation, _) = prepared.run(Some(ctx.cancel.clone()), &mut |d, t| bar.update(d, t))?;
     bar.finish();
     let label = args.scene.display().to_string();
     write_derivation(staged.path(), &label, &scene, &derivation, None, "")?;
@@ -77,37 +57,10 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     if args.json {
         print_report(&out)?;
     } else {
-        let d = &derivation.derived;
-        // What was derived: an MSM, or the exact reduction (a linear model, not an MSM).
-        let what = match derivation.method {
-            Method::Reduction => format!(
-                "exact reduction onto {} free nodes (reduction.json: a linear node-space model, not an MSM; the reference an MSM is judged against)",
-                derivation.reduction.as_ref().map_or(0, |r| r.free.len())
-            ),
-            m => format!("derived MSM ({})", m.name()),
-        };
-        let mut parts = Vec::new();
-        let constants = constants_text(&d.constants, 6);
-        if !constants.is_empty() {
-            parts.push(constants);
-        }
-        parts.push(mass_text(&derivation, d.m));
-        println!(
-            "{what}: {}; dt_critical = {:.5}; central node rel. RMS = {} over {:.3} s ({}), second excitation {:.4}",
-            parts.join(", "),
-            d.dt_critical,
-            if d.validation.relative_rms.is_nan() {
-                "n/a".to_string()
-            } else {
-                format!("{:.4}", d.validation.relative_rms)
-            },
-            d.validation.horizon,
-            d.validation.integrator,
-            derivation.second_excitation.relative_rms
-        );
+        println!("{}", derivation_line(&derivation));
         println!("Outputs in {}", out.display());
     }
-    if let (Some(why), true) = (fallback, ctx.verbose()) {
+    if let (Some(why), true) = (choice.fallback, ctx.verbose()) {
         eprintln!("note: {why}");
     }
     for w in &derivation.warnings {
@@ -136,38 +89,4 @@ fn run_springs(ctx: &Context, args: &DeriveArgs, scene: &Scene) -> CmdResult {
         println!("Outputs in {}", out.display());
     }
     Ok(())
-}
-
-/// The node masses of a derivation's result: one `m` when every free node has it, else their
-/// range and mean (the linear derivations fit one mass per node); the reduction's total.
-fn mass_text(derivation: &nurbspring_derive::Derivation, m: f64) -> String {
-    let free: Vec<f64> = match &derivation.lattice {
-        Some(l) => l
-            .masses
-            .iter()
-            .zip(&l.fixed)
-            .filter(|(_, f)| !**f)
-            .map(|(m, _)| *m)
-            .collect(),
-        None => {
-            return format!(
-                "free mass {:.6} (M_T, against the D-NURBS's {:.6})",
-                derivation.mass.free_msm, derivation.mass.free_dnurbs
-            );
-        }
-    };
-    let (lo, hi) = free
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
-    if free.is_empty() || lo == hi {
-        format!("m = {m:.6}")
-    } else {
-        format!(
-            "node masses {lo:.6} to {hi:.6} (mean {:.6} over {} free nodes)",
-            free.iter().sum::<f64>() / free.len() as f64,
-            free.len()
-        )
-    }
 }

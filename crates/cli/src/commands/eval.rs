@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use nurbspring_dnurbs::Geometry;
-use nurbspring_scene::export::{TessellationFormat, write_tessellation};
+use nurbspring_scene::Geometry;
+use nurbspring_scene::export::{TessellationFormat, point_json, write_tessellation};
 use nurbspring_scene::{Error, Scene};
 use serde_json::json;
 
@@ -96,37 +96,9 @@ pub fn run(_ctx: &Context, args: EvalArgs) -> CmdResult {
     let order = args.derivatives as usize;
     let mut points = Vec::new();
     for at in &args.at {
-        let outside = |e: nurbspring_geom::GeomError| Error::option("--at", at, e.to_string());
-        match &geometry {
-            Geometry::Surface(s) => {
-                let uv = parse_params(at, 2)?;
-                let d = s.derivatives(uv[0], uv[1], order).map_err(outside)?;
-                let mut entry = json!({"u": uv[0], "v": uv[1], "point": d.point});
-                if order >= 1 {
-                    let mut dd = json!({"u": d.u, "v": d.v});
-                    if order >= 2 {
-                        dd["uu"] = json!(d.uu);
-                        dd["uv"] = json!(d.uv);
-                        dd["vv"] = json!(d.vv);
-                    }
-                    entry["d"] = dd;
-                }
-                points.push(entry);
-            }
-            Geometry::Curve(c) => {
-                let u = parse_params(at, 1)?;
-                let d = c.derivatives(u[0], order).map_err(outside)?;
-                let mut entry = json!({"u": u[0], "point": d.point});
-                if order >= 1 {
-                    let mut dd = json!({"u": d.u});
-                    if order >= 2 {
-                        dd["uu"] = json!(d.uu);
-                    }
-                    entry["d"] = dd;
-                }
-                points.push(entry);
-            }
-        }
+        let outside = |e: nurbspring_scene::GeomError| Error::option("--at", at, e.to_string());
+        let params = parse_params(at, if geometry.is_curve() { 1 } else { 2 })?;
+        points.push(point_json(&geometry, &params, order).map_err(outside)?);
     }
     if let Some(grid) = &args.grid {
         let out = args.out.as_ref().ok_or_else(|| {

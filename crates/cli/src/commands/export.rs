@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use nurbspring_exchange::Shape;
+use nurbspring_scene::Shape;
 use nurbspring_scene::geometry_file::{
     GeometryFormat, write_geometry_file, write_tessellated_curve_obj, write_tessellated_obj,
 };

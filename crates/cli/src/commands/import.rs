@@ -1,10 +1,10 @@
 //! `nurbspring import FILE --out SCENE.toml`: a scene from a geomdl JSON, IGES or OBJ file.
 
-use std::path::{Component, Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 use nurbspring_scene::geometry_file::{
-    GeometrySource, imported_scene, read_geometry_file, write_text_file,
+    GeometrySource, imported_scene, read_geometry_file, relative_to_scene, write_text_file,
 };
 use nurbspring_scene::{Error, GeometrySpec, Scene};
 
@@ -82,41 +82,4 @@ pub fn run(ctx: &Context, args: ImportArgs) -> CmdResult {
         args.out.display()
     );
     Ok(())
-}
-
-/// The path of `file` as a scene at `scene` should write it: relative to the scene's folder
-/// when both can be resolved, else absolute.
-fn relative_to_scene(file: &Path, scene: &Path) -> String {
-    let absolute = |p: &Path| std::path::absolute(p).ok();
-    let dir = scene
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let (Some(file_abs), Some(dir_abs)) = (absolute(file), absolute(dir)) else {
-        return file.display().to_string();
-    };
-    fn normal(p: &Path) -> Vec<Component<'_>> {
-        p.components()
-            .filter(|c| !matches!(c, Component::CurDir))
-            .collect()
-    }
-    let (f, d) = (normal(&file_abs), normal(&dir_abs));
-    if f.iter()
-        .chain(&d)
-        .any(|c| matches!(c, Component::ParentDir))
-    {
-        return file_abs.display().to_string();
-    }
-    let common = f.iter().zip(&d).take_while(|(a, b)| a == b).count();
-    if common == 0 {
-        return file_abs.display().to_string();
-    }
-    let mut rel = PathBuf::new();
-    for _ in common..d.len() {
-        rel.push("..");
-    }
-    for c in &f[common..] {
-        rel.push(c.as_os_str());
-    }
-    rel.to_string_lossy().replace('\\', "/")
 }

@@ -14,9 +14,8 @@ pub mod stability;
 pub mod steady;
 
 use clap::{Args, ValueEnum};
-use nurbspring_msm::{Class, Constants, SpringKind};
-use nurbspring_scene::MsmOverrides;
-use nurbspring_sim::IntegratorKind;
+
+use nurbspring_scene::{Class, Constants, IntegratorKind, MsmOverrides, SpringKind};
 
 /// MSM parameters that override the scene's `[msm]` section or the msm.json file.
 #[derive(Args, Debug, Default, Clone)]

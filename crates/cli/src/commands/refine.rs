@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use nurbspring_scene::geometry_file::{Refinement, refine_scene, write_text_file};
-use nurbspring_scene::{Error, GeometrySpec, Scene};
+use nurbspring_scene::{Error, Scene};
 
 use crate::{CmdResult, Context};
 
@@ -54,25 +54,6 @@ fn parse_degrees(s: &str) -> Result<(usize, Option<usize>), Error> {
     }
 }
 
-fn describe(g: &GeometrySpec) -> String {
-    match g {
-        GeometrySpec::Surface(s) => format!(
-            "{} x {} control points, degrees {},{}",
-            s.n_u(),
-            s.n_v(),
-            s.degree_u,
-            s.degree_v
-        ),
-        GeometrySpec::Curve(c) => {
-            format!(
-                "{} control points, degree {}",
-                c.control_points.len(),
-                c.degree
-            )
-        }
-    }
-}
-
 /// Refines the scene's geometry exactly and writes the scene with the finer net.
 pub fn run(_ctx: &Context, args: RefineArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
@@ -108,8 +89,8 @@ pub fn run(_ctx: &Context, args: RefineArgs) -> CmdResult {
         args.scene.display(),
         ops.join(" "),
         scene.geometry.section(),
-        describe(&scene.geometry),
-        describe(&refined.geometry),
+        scene.geometry.describe(),
+        refined.geometry.describe(),
         refined.to_toml()
     );
     write_text_file(&args.out, &text)?;
@@ -117,8 +98,8 @@ pub fn run(_ctx: &Context, args: RefineArgs) -> CmdResult {
     println!(
         "refined {}: {} -> {}; written to {}",
         scene.geometry.section(),
-        describe(&scene.geometry),
-        describe(&refined.geometry),
+        scene.geometry.describe(),
+        refined.geometry.describe(),
         args.out.display()
     );
     Ok(())

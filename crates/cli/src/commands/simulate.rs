@@ -1,13 +1,11 @@
 //! `nurbspring simulate SCENE --model dnurbs|msm --out DIR`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 
 use clap::{Args, ValueEnum};
-use nurbspring_scene::run::{RunRequest, Simulated, simulate_dnurbs, simulate_msm, write_run};
-use nurbspring_scene::{DEFAULT_MAX_FRAMES, Error, Scene};
-use nurbspring_sim::{IntegratorKind, RunSummary, Schedule};
-use serde_json::json;
+use nurbspring_scene::run::{RunRequest, simulate_dnurbs, simulate_msm, write_run};
+use nurbspring_scene::{DEFAULT_MAX_FRAMES, Error, IntegratorKind, Scene};
 
 use crate::commands::{IntegratorChoice, MsmFlags, flag};
 use crate::progress::Progress;
@@ -131,20 +129,9 @@ pub fn run(ctx: &Context, args: SimulateArgs) -> CmdResult {
         );
     }
     if args.json {
-        return print_json(&run_summary(what, &simulated, &summary, &out));
+        return print_json(&simulated.summary_json(what.name(), &summary, &out));
     }
-    println!(
-        "{} run ({}, {} steps, {} samples, {} ParaView frames) written to {}",
-        what.label(),
-        Schedule {
-            integrator: simulated.integrator,
-            substeps: simulated.substeps
-        },
-        summary.steps,
-        simulated.trajectory.t.len(),
-        simulated.frames.len(),
-        out.display()
-    );
+    println!("{}", simulated.result_line(what.label(), &summary, &out));
     Ok(())
 }
 
@@ -162,34 +149,4 @@ impl ModelKind {
             ModelKind::Msm => "msm",
         }
     }
-}
-
-/// What `simulate --json` prints: the settings the run used and what it wrote.
-pub fn run_summary(
-    model: ModelKind,
-    simulated: &Simulated,
-    summary: &RunSummary,
-    out: &Path,
-) -> serde_json::Value {
-    let mut v = json!({
-        "model": model.name(),
-        "integrator": simulated.integrator.name(),
-        "substeps": simulated.substeps,
-        "dt": simulated.dt,
-        "t_end": simulated.t_end,
-        "steps": summary.steps,
-        "t_final": summary.t_final,
-        "halved_steps": summary.halved_steps,
-        "samples": simulated.trajectory.t.len(),
-        "frames": simulated.frames.len(),
-        "pvd": simulated.pvd,
-        "vtk_every": simulated.vtk_every,
-        "warnings": simulated.warnings,
-        "out": out.display().to_string(),
-    });
-    if let (Some(s), serde_json::Value::Object(map)) = (simulated.stability, &mut v) {
-        map.insert("omega_max".into(), json!(s.omega_max));
-        map.insert("dt_critical".into(), json!(s.dt_critical));
-    }
-    v
 }

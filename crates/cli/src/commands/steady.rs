@@ -6,8 +6,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use nurbspring_scene::Scene;
-use nurbspring_scene::export::{write_load_path, write_steady};
-use nurbspring_scene::run::{SteadyRequest, steady_state};
+use nurbspring_scene::export::write_steady;
+use nurbspring_scene::run::{SteadyRequest, steady_state, write_load_path};
 use serde_json::json;
 
 use crate::progress::Progress;
