@@ -20,6 +20,8 @@ use nurbspring_sim::IntegratorKind;
 
 struct Case {
     name: String,
+    /// The scene's end time (a mechanism's dynamic run covers it).
+    t_end: f64,
     surface: NurbsSurface,
     shell: ShellMaterial,
     loads: Loads,
@@ -70,6 +72,7 @@ fn cases() -> Vec<Case> {
     let mut out = Vec::new();
     // Sze's cantilever (end shear up to P_max = 4).
     out.push(Case {
+        t_end: 0.5,
         name: "Sze cantilever, cubic 16×1 spans".into(),
         surface: refined(&rectangle(10.0, 1.0), 3, (16, 1)).unwrap(),
         shell: ShellMaterial {
@@ -92,6 +95,7 @@ fn cases() -> Vec<Case> {
     for spans in [6, 14, 30] {
         let n = spans + 3;
         out.push(Case {
+            t_end: 0.5,
             name: format!("flat plate clamped on one edge, point load at a free corner, {n}²"),
             surface: refined(&rectangle(0.4, 0.3), 3, (spans, spans)).unwrap(),
             shell: steel,
@@ -106,6 +110,7 @@ fn cases() -> Vec<Case> {
             constraints: clamp(&[Edge::U0]),
         });
         out.push(Case {
+            t_end: 0.5,
             name: format!("cylindrical panel pinned on its straight edges, gravity, {n}²"),
             surface: refined(
                 &cylinder_sector(0.5, 0.6, 0.9, std::f64::consts::PI - 0.9),
@@ -121,6 +126,7 @@ fn cases() -> Vec<Case> {
             constraints: pin(&[Edge::V0, Edge::V1]),
         });
         out.push(Case {
+            t_end: 0.5,
             name: format!("spherical zone clamped at its equator, gravity, {n}²"),
             surface: refined(&sphere_zone(0.5, 1.0), 3, (spans, spans)).unwrap(),
             shell: steel,
@@ -131,10 +137,13 @@ fn cases() -> Vec<Case> {
             constraints: clamp(&[Edge::U0]),
         });
     }
-    for spans in [6, 12] {
+    // The cloth swings about its corners like a pendulum of period about 2π √(2L/3g) = 1.16 s:
+    // over the example's 0.5 s, and over three swings.
+    for (spans, t_end) in [(6, 0.5), (12, 0.5), (12, 3.5)] {
         let n = spans + 2;
         out.push(Case {
-            name: format!("cloth pinned at two corners, gravity, quadratic {n}²"),
+            t_end,
+            name: format!("cloth pinned at two corners, gravity, quadratic {n}², {t_end} s"),
             surface: refined(&rectangle(0.5, 0.5), 2, (spans, spans)).unwrap(),
             shell: cloth,
             loads: Loads {
@@ -174,7 +183,7 @@ fn main() {
             initial: InitialConditions::default(),
             time: TimeSettings {
                 dt: 0.005,
-                t_end: 0.5,
+                t_end: case.t_end,
                 dnurbs_integrator: IntegratorKind::GeneralizedAlpha,
                 msm_integrator: IntegratorKind::GeneralizedAlpha,
             },
