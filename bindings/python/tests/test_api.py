@@ -255,7 +255,7 @@ def test_mass_spring_from_derived_dict_runs():
     assert msm.springs.shape == (len(d.msm["springs"]), 2)
     assert isinstance(msm.elements, list)
     run = ns.simulate(msm, integrator="newmark", dt=0.01, t_end=0.5)
-    assert run["probes"].shape == (run["t"].size, 1, 3)
+    assert run["probes"].shape == (run["t"].size, len(d.msm["probe_nodes"]), 3)
     assert run["integrator"] == "newmark"
     assert d.mass_spring().positions.shape == (n, 3)
 

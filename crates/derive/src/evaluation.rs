@@ -8,11 +8,11 @@ use nurbspring_linalg::SparseMatrix;
 use nurbspring_sim::State;
 
 use crate::modal_solution::{DENSE_MODES, ModalBasis};
-use crate::outcome::{FrequencyRow, MassReport, ProbeError, Validation};
+use crate::outcome::{FrequencyRow, MassReport, ProbeError, Regime, Validation};
 use crate::reference::{ReferenceKind, Watch, run_scalar, scalar_rows};
 use crate::scalar::{EnergyOrigin, ScalarSystem};
 use crate::setup::{Method, Setup};
-use crate::validation::{compare, compare_points, energy_drift, mac};
+use crate::validation::{compare, compare_points, energy_drift, match_modes};
 use crate::{DeriveError, Trajectory};
 
 /// The validation horizon covers at least this many periods of the lowest mode.
@@ -28,6 +28,20 @@ pub const WARN_MASS_FACTOR: f64 = 2.0;
 pub const WARN_TRUNCATION: f64 = 0.01;
 /// Distinct frequencies listed in the frequency table.
 pub const TABLE_MODES: usize = 8;
+/// The MSM modes searched for the match of a D-NURBS mode: the lowest this many times
+/// [`TABLE_MODES`].
+pub const MATCH_WINDOW: usize = 3;
+/// A matched low mode whose frequency is off by more than this (relative) is reported.
+pub const WARN_MODE_FREQUENCY: f64 = 0.05;
+/// The modes compared for the regime's frequency bound.
+pub const REGIME_MODES: usize = 100;
+/// The regime's frequency bound: matched modes within this relative error.
+pub const REGIME_FREQUENCY: f64 = 0.01;
+/// The linear range: displacements up to this share of the surface's size. Both models are
+/// linear in the displacement; a displacement w over a size L strains a sheet by about
+/// `(w/L)²/2` beyond what they count (0.5% at this bound), and turns it so far that loads
+/// and stiffness no longer act along the rest shape's directions.
+pub const LINEAR_RANGE: f64 = 0.1;
 
 /// `max(t_end, PERIODS · 2π/ω₁)`.
 pub fn horizon(t_end: f64, omega1: f64) -> f64 {
@@ -287,30 +301,118 @@ pub fn dnurbs_impulse_run(
     run_scalar(&sys, &modes.basis, &dnurbs_watch(setup, &sys), times, dt)
 }
 
-/// The lowest distinct frequencies of both models with the MAC of their shapes at the free
-/// nodes (`omega_ff`: scalar Ω of the free nodes on the free control points; `msm` a basis
-/// over the free nodes).
+/// The lowest D-NURBS modes, each with the MSM mode matched to it by MAC at the free nodes
+/// ([`match_modes`]: a repeated frequency as a subspace) among the MSM's lowest
+/// `MATCH_WINDOW × TABLE_MODES` (`omega_ff`: scalar Ω of the free nodes on the free control
+/// points; `msm` a basis over the free nodes). A D-NURBS mode left without a match is not
+/// listed.
 pub fn frequency_table(
     dn: &ModalBasis,
     omega_ff: &SparseMatrix,
     msm: &ModalBasis,
 ) -> Vec<FrequencyRow> {
-    let count = TABLE_MODES.min(dn.len()).min(msm.len());
-    (0..count)
-        .map(|i| {
-            let phi = dn.mode(i);
+    matched_modes(dn, omega_ff, msm, TABLE_MODES)
+}
+
+/// The lowest `count` elastic D-NURBS modes (a repeated frequency completed) with the MSM
+/// modes matched to them by MAC among the MSM's lowest `MATCH_WINDOW × count`.
+pub fn matched_modes(
+    dn: &ModalBasis,
+    omega_ff: &SparseMatrix,
+    msm: &ModalBasis,
+    count: usize,
+) -> Vec<FrequencyRow> {
+    let elastic: Vec<usize> = (0..dn.len()).filter(|&i| dn.omega[i] > 0.0).collect();
+    let mut count = count.min(elastic.len());
+    // A repeated frequency is listed whole.
+    while count < elastic.len()
+        && (dn.omega[elastic[count]] - dn.omega[elastic[count - 1]]).abs()
+            <= crate::validation::REPEATED_FREQUENCY * dn.omega[elastic[count]]
+    {
+        count += 1;
+    }
+    let picked = &elastic[..count];
+    let reference: Vec<Vec<f64>> = picked
+        .iter()
+        .map(|&i| {
             let mut at_nodes = vec![0.0; omega_ff.nrows()];
-            omega_ff.mul_vec(&phi, &mut at_nodes);
-            let (a, b) = (dn.omega[i], msm.omega[i]);
-            FrequencyRow {
+            omega_ff.mul_vec(&dn.mode(i), &mut at_nodes);
+            at_nodes
+        })
+        .collect();
+    let omega: Vec<f64> = picked.iter().map(|&i| dn.omega[i]).collect();
+    let window: Vec<usize> = (0..msm.len())
+        .filter(|&j| msm.omega[j] > 0.0)
+        .take(MATCH_WINDOW * count)
+        .collect();
+    let candidates: Vec<Vec<f64>> = window.iter().map(|&j| msm.mode(j)).collect();
+    match_modes(&reference, &omega, &candidates)
+        .into_iter()
+        .zip(picked)
+        .filter_map(|(m, &i)| {
+            let (j, mac) = m?;
+            let (a, b) = (dn.omega[i], msm.omega[window[j]]);
+            Some(FrequencyRow {
                 mode: i + 1,
                 dnurbs: a,
+                msm_mode: window[j] + 1,
                 msm: b,
                 relative_difference: if a > 0.0 { b / a - 1.0 } else { f64::NAN },
-                mac: Some(mac(&at_nodes, &msm.mode(i))),
-            }
+                mac: Some(mac),
+            })
         })
         .collect()
+}
+
+/// The regime a derived model may be used in (docs/math.md §8.7): the frequencies up to
+/// which the D-NURBS modes, in ascending order, each have a matched MSM mode within
+/// [`REGIME_FREQUENCY`] (`rows`: the matched modes, ascending), and the displacements up to
+/// [`LINEAR_RANGE`] of the surface's size (the diagonal of its lattice's bounding box at
+/// rest), beside the largest displacement the D-NURBS makes at the probes in `reference`.
+pub fn regime(setup: &Setup, reference: &Trajectory, rows: &[FrequencyRow]) -> Regime {
+    let mut frequency = 0.0;
+    let mut modes = 0;
+    for r in rows {
+        if r.relative_difference.abs() > REGIME_FREQUENCY || r.relative_difference.is_nan() {
+            break;
+        }
+        frequency = r.dnurbs;
+        modes += 1;
+    }
+    let positions = &setup.lattice().positions;
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in positions {
+        for x in 0..3 {
+            lo[x] = lo[x].min(p[x]);
+            hi[x] = hi[x].max(p[x]);
+        }
+    }
+    let size = (0..3).map(|x| (hi[x] - lo[x]).powi(2)).sum::<f64>().sqrt();
+    let motion = reference
+        .probes
+        .iter()
+        .filter_map(|probe| {
+            let start = probe.first()?;
+            Some(
+                probe
+                    .iter()
+                    .map(|x| {
+                        ((x[0] - start[0]).powi(2)
+                            + (x[1] - start[1]).powi(2)
+                            + (x[2] - start[2]).powi(2))
+                        .sqrt()
+                    })
+                    .fold(0.0, f64::max),
+            )
+        })
+        .fold(0.0, f64::max);
+    Regime {
+        frequency,
+        modes,
+        size,
+        amplitude: LINEAR_RANGE * size,
+        motion,
+    }
 }
 
 /// Each value three times (x, y, z), ascending.
@@ -363,9 +465,21 @@ pub fn warnings(
     frequencies: &[crate::outcome::FrequencyRow],
     mass: &MassReport,
     clamped: &[String],
+    regime: &Regime,
 ) -> Vec<String> {
     let mut out = Vec::new();
     let pct = |x: f64| 100.0 * x;
+    if regime.motion > regime.amplitude {
+        out.push(format!(
+            "the scene's own motion reaches {:.4} at the probes, {:.0}% of the surface's size \
+             {:.4} (linear range: {:.0}%): the D-NURBS and the MSM are linear models, so their \
+             agreement here says nothing of so large a motion",
+            regime.motion,
+            pct(regime.motion / regime.size),
+            regime.size,
+            pct(LINEAR_RANGE)
+        ));
+    }
     // NaN (no motion to compare) counts as a bad sign too.
     let above = |x: f64, limit: f64| x.is_nan() || x > limit;
     if validation.dnurbs_amplitude == 0.0 {
@@ -398,6 +512,22 @@ pub fn warnings(
             first.msm,
             first.dnurbs
         ));
+    }
+    for row in frequencies.iter().skip(1) {
+        if above(row.relative_difference.abs(), WARN_MODE_FREQUENCY) {
+            out.push(format!(
+                "D-NURBS mode {} ({:.6} rad/s) is matched by MAC ({}) to MSM mode {} at \
+                 {:.6} rad/s, {:+.1}% off (above {:.0}%)",
+                row.mode,
+                row.dnurbs,
+                row.mac
+                    .map_or_else(|| "by rank".to_string(), |m| format!("{m:.3}")),
+                row.msm_mode,
+                row.msm,
+                pct(row.relative_difference),
+                pct(WARN_MODE_FREQUENCY)
+            ));
+        }
     }
     let ratio = mass.free_msm / mass.free_dnurbs;
     if !(1.0 / WARN_MASS_FACTOR..=WARN_MASS_FACTOR).contains(&ratio) {
@@ -861,6 +991,7 @@ mod tests {
             &rows,
             &mass,
             &[],
+            &Regime::default(),
         );
         assert!(w.is_empty(), "{w:?}");
         let w = warnings(
@@ -870,6 +1001,7 @@ mod tests {
             &rows,
             &mass,
             &[],
+            &Regime::default(),
         );
         assert_eq!(w.len(), 2, "{w:?}");
         assert!(
@@ -904,6 +1036,7 @@ mod tests {
         let rows = [crate::outcome::FrequencyRow {
             mode: 1,
             dnurbs: 1.0,
+            msm_mode: 1,
             msm: 1.0,
             relative_difference: 0.0,
             mac: None,
@@ -916,7 +1049,15 @@ mod tests {
             ..MassReport::default()
         };
         let warn = |method, mass: &MassReport, clamped: &[String]| {
-            warnings(method, &quiet, &quiet, &rows, mass, clamped)
+            warnings(
+                method,
+                &quiet,
+                &quiet,
+                &rows,
+                mass,
+                clamped,
+                &Regime::default(),
+            )
         };
         assert!(warn(Method::Modal, &masses(3.0, 2.0, 2.0), &[]).is_empty());
         assert!(warn(Method::Modal, &masses(1.5, 2.0, 2.0), &[]).is_empty());
@@ -954,14 +1095,30 @@ mod tests {
             ..validation_with(f64::INFINITY)
         };
         let quiet = validation_with(0.0);
-        let w = warnings(Method::Modal, &stopped, &quiet, &rows, &mass, &[]);
+        let w = warnings(
+            Method::Modal,
+            &stopped,
+            &quiet,
+            &rows,
+            &mass,
+            &[],
+            &Regime::default(),
+        );
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(
             w[0].starts_with("the MSM's validation run stopped before 1.000 s (Newton iteration failed at step 7)"),
             "{w:?}"
         );
         assert!(!w[0].contains("inf%"), "{w:?}");
-        let w = warnings(Method::Modal, &quiet, &stopped, &rows, &mass, &[]);
+        let w = warnings(
+            Method::Modal,
+            &quiet,
+            &stopped,
+            &rows,
+            &mass,
+            &[],
+            &Regime::default(),
+        );
         assert_eq!(
             w,
             vec![
@@ -969,5 +1126,105 @@ mod tests {
                     .to_string()
             ]
         );
+    }
+
+    /// A matched mode above the lowest is reported beyond 5% (not at 4.9%), and a motion
+    /// beyond 10% of the surface's size (not at 9%), each with its numbers.
+    #[test]
+    fn mode_and_linear_range_warnings_at_their_thresholds() {
+        let quiet = validation_with(0.0);
+        let mass = MassReport {
+            free_msm: 1.0,
+            free_dnurbs: 1.0,
+            ..MassReport::default()
+        };
+        let row = |mode: usize, off: f64| crate::outcome::FrequencyRow {
+            mode,
+            dnurbs: 2.0,
+            msm_mode: mode + 1,
+            msm: 2.0 * (1.0 + off),
+            relative_difference: off,
+            mac: Some(0.98),
+        };
+        let regime = |motion: f64| Regime {
+            frequency: 1.0,
+            modes: 1,
+            size: 2.0,
+            amplitude: LINEAR_RANGE * 2.0,
+            motion,
+        };
+        let warn = |rows: &[crate::outcome::FrequencyRow], r: &Regime| {
+            warnings(Method::Modal, &quiet, &quiet, rows, &mass, &[], r)
+        };
+        let fine = [row(1, 0.0), row(2, 0.049), row(3, -0.049)];
+        assert!(warn(&fine, &regime(0.18)).is_empty());
+        let off = [row(1, 0.0), row(2, 0.051), row(3, -0.06)];
+        let w = warn(&off, &regime(0.0));
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(
+            w[0].starts_with(
+                "D-NURBS mode 2 (2.000000 rad/s) is matched by MAC (0.980) to MSM mode 3"
+            ) && w[0].contains("+5.1% off"),
+            "{w:?}"
+        );
+        assert!(w[1].contains("-6.0% off"), "{w:?}");
+        let w = warn(&fine, &regime(0.8));
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].starts_with("the scene's own motion reaches 0.8000 at the probes, 40% of the surface's size 2.0000"),
+            "{w:?}"
+        );
+    }
+
+    /// The regime by hand: the rows up to the first beyond 1% set the frequency bound, the
+    /// size is the lattice's bounding-box diagonal, the motion the largest displacement of
+    /// any probe.
+    #[test]
+    fn regime_by_hand() {
+        let k = KnotVector::clamped_uniform(2, 2).unwrap();
+        let pts: Vec<[f64; 3]> = (0..16)
+            .map(|i| {
+                [
+                    0.5 * (i / 4) as f64,
+                    0.3 * (i % 4) as f64,
+                    0.1 * (i % 3) as f64,
+                ]
+            })
+            .collect();
+        let s = setup(Geometry::Surface(
+            NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 16]).unwrap(),
+        ));
+        let row = |mode: usize, dnurbs: f64, off: f64| crate::outcome::FrequencyRow {
+            mode,
+            dnurbs,
+            msm_mode: mode,
+            msm: dnurbs * (1.0 + off),
+            relative_difference: off,
+            mac: Some(1.0),
+        };
+        let rows = [
+            row(1, 1.0, 0.0),
+            row(2, 2.0, 0.009),
+            row(3, 3.0, -0.011),
+            row(4, 4.0, 0.0),
+        ];
+        let mut trajectory = Trajectory::new(2);
+        trajectory.t = vec![0.0, 1.0, 2.0];
+        trajectory.probes = vec![
+            vec![[0.0, 0.0, 1.0], [0.0, 0.3, 1.4], [0.0, 0.0, 1.0]],
+            vec![[1.0, 1.0, 0.0], [1.0, 1.0, 0.2], [1.0, 1.0, -0.1]],
+        ];
+        let r = regime(&s, &trajectory, &rows);
+        assert_eq!((r.frequency, r.modes), (2.0, 2));
+        let positions = &s.lattice().positions;
+        let extent = |x: usize| {
+            let v = positions.iter().map(|p| p[x]);
+            v.clone().fold(f64::NEG_INFINITY, f64::max) - v.fold(f64::INFINITY, f64::min)
+        };
+        let size = (extent(0).powi(2) + extent(1).powi(2) + extent(2).powi(2)).sqrt();
+        assert!((r.size - size).abs() < 1e-15 * size);
+        assert!((r.amplitude - LINEAR_RANGE * size).abs() < 1e-15 * size);
+        assert!((r.motion - 0.5).abs() < 1e-15, "{}", r.motion);
+        assert_eq!(regime(&s, &trajectory, &[row(1, 1.0, 0.02)]).modes, 0);
     }
 }

@@ -1,21 +1,22 @@
 //! The `excitation` derivation (docs/math.md §8.4): the modal fit refined on the D-NURBS modes
-//! that the scene's own initial velocity and loads excite. The masses are the reference
-//! masses times one scale; the unknowns are `log k_c` (of the classes the modal fit kept
-//! non-zero) and the log mass scale; the residuals, over the `q` most excited modes, are the
-//! log ratio of each mode's frequency to that of the MSM mode of best MAC and the difference
-//! of their normalized shapes at the nodes, weighted by the square root of the mode's share of
-//! the motion. Levenberg–Marquardt from the modal fit, then the calibration of the lowest
-//! frequency. It can over-fit: constants far from the modal fit's, or a much smaller explicit
-//! step, are reported as warnings.
+//! that the scene's own initial velocity and loads excite. The masses are the modal fit's
+//! masses times one scale; the unknowns are `log s_c`, one scale of the modal fit's element
+//! constants per element class, and the log mass scale; the residuals, over the `q` most
+//! excited modes, are the log ratio of each mode's frequency to that of the MSM mode of best
+//! MAC and the difference of their normalized shapes at the nodes, weighted by the square root
+//! of the mode's share of the motion, and a pull of each `log s_c` towards 0.
+//! Levenberg–Marquardt from the modal fit, then the calibration of the lowest frequency. It
+//! can over-fit: scales far from 1, or a much smaller explicit step, are reported as warnings.
 
 use nurbspring_linalg::{
     DenseMatrix, SparseMatrix, cholesky_solve_dense, generalized_eigen_sparse_lowest,
+    largest_generalized_eigenvalue,
 };
 use nurbspring_msm::{Class, Constants};
 
 use crate::DeriveError;
 use crate::evaluation::DnurbsModes;
-use crate::modal::{ModalSolution, combine, lowest_frequency};
+use crate::modal::{ModalSolution, lowest_frequency};
 use crate::nodes::NodeMap;
 use crate::outcome::ExcitationReport;
 use crate::validation::mac;
@@ -28,11 +29,14 @@ pub const CONSTANT_RANGE: f64 = 1e3;
 pub const STEP_SHRINK: f64 = 10.0;
 /// Levenberg–Marquardt iterations.
 const ITERATIONS: usize = 40;
+/// The weight of the rows `log s_c` that keep each class scale near the modal fit's: a 10%
+/// change costs as much as a 1% frequency error of a mode carrying the whole motion.
+const SCALE_REGULARIZATION: f64 = 0.1;
 
 /// The refined model.
 pub struct ExcitationSolution {
-    /// Constants by class.
-    pub constants: Constants,
+    /// The scale of the modal fit's element constants, by class.
+    pub scales: Constants,
     /// Calibrated masses of the free nodes.
     pub masses: Vec<f64>,
     /// The report.
@@ -57,36 +61,23 @@ fn msm_modes(
     ))
 }
 
-/// The largest angular frequency of `L x = ω² diag(m) x` (power iteration on `diag(m)⁻¹ L`).
-fn highest_frequency(l: &SparseMatrix, masses: &[f64]) -> f64 {
-    let n = masses.len();
-    let mut x: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 * 0.1).collect();
-    let mut lambda = 0.0;
-    let mut y = vec![0.0; n];
-    for _ in 0..200 {
-        l.mul_vec(&x, &mut y);
-        for (v, m) in y.iter_mut().zip(masses) {
-            *v /= m;
-        }
-        let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if norm == 0.0 {
-            return 0.0;
-        }
-        lambda = norm / x.iter().map(|v| v * v).sum::<f64>().sqrt();
-        x.iter_mut().zip(&y).for_each(|(a, b)| *a = b / norm);
-    }
-    lambda.sqrt()
+/// The largest angular frequency of `L x = ω² diag(m) x` (Lanczos on `diag(m)⁻¹ L`).
+fn highest_frequency(l: &SparseMatrix, masses: &[f64]) -> Result<f64, DeriveError> {
+    let top = largest_generalized_eigenvalue(l, &SparseMatrix::from_diagonal(masses), 1e-10)?;
+    Ok(top.max(0.0).sqrt())
 }
 
-/// The excitation-aware refinement of `modal`.
+/// The excitation-aware refinement of `modal`: `classes` with `stiffness`, each class's
+/// stiffness on the free nodes with the modal fit's element constants.
 pub fn excitation_fit(
     modes: &DnurbsModes,
     map: &NodeMap,
     classes: &[Class],
-    units: &[SparseMatrix],
+    stiffness: &[SparseMatrix],
     modal: &ModalSolution,
     reference: &[f64],
 ) -> Result<ExcitationSolution, DeriveError> {
+    let units = stiffness;
     let sys = &modes.system;
     let basis = &modes.basis;
     // Each mode's oscillation amplitude from the initial state and the load.
@@ -132,17 +123,17 @@ pub fn excitation_fit(
         .map(|&(i, a2)| (basis.omega[i], map.at_nodes(&basis.mode(i)), a2 / total))
         .collect();
     let active: Vec<usize> = (0..classes.len())
-        .filter(|&c| modal.constants.value(classes[c]) > 0.0 && units[c].frobenius_norm() > 0.0)
+        .filter(|&c| units[c].frobenius_norm() > 0.0)
         .collect();
     let active_units: Vec<&SparseMatrix> = active.iter().map(|&c| &units[c]).collect();
     let n = reference.len();
     let count = (2 * EXCITED_MODES).min(n);
-    // θ = (log k_c, log s); masses s · m̄.
+    // θ = (log s_c, log s); masses s · m̄.
     let residual = |theta: &[f64]| -> Result<Vec<f64>, DeriveError> {
         let k: Vec<f64> = theta[..active.len()].iter().map(|t| t.exp()).collect();
         let s = theta[active.len()].exp();
         let l = combine(&active_units, &k, n)?;
-        let masses: Vec<f64> = reference.iter().map(|m| s * m).collect();
+        let masses: Vec<f64> = modal.masses.iter().map(|m| s * m).collect();
         let (omega, vectors) = msm_modes(&l, &masses, count)?;
         let mut r = Vec::new();
         for (w, shape, share) in &targets {
@@ -159,21 +150,17 @@ pub fn excitation_fit(
                 r.push(weight * (a / na - sign * b / nb));
             }
         }
+        // The pull of each class scale towards the modal fit's (log 1).
+        r.extend(
+            theta[..active.len()]
+                .iter()
+                .map(|t| SCALE_REGULARIZATION * t),
+        );
         Ok(r)
     };
-    let mut theta: Vec<f64> = active
-        .iter()
-        .map(|&c| modal.constants.value(classes[c]).ln())
-        .collect();
-    // The modal masses are m̄-like: start from their mean ratio to m̄.
-    let s0 = modal
-        .masses
-        .iter()
-        .zip(reference)
-        .map(|(m, r)| m / r)
-        .sum::<f64>()
-        / n as f64;
-    theta.push(s0.ln());
+    let mut theta: Vec<f64> = vec![0.0; active.len()];
+    // The modal fit's masses, scaled.
+    theta.push(0.0);
     let mut r = residual(&theta)?;
     let start = norm(&r);
     let mut damping = 1e-3;
@@ -233,36 +220,46 @@ pub fn excitation_fit(
     let k: Vec<f64> = theta[..active.len()].iter().map(|t| t.exp()).collect();
     let s = theta[active.len()].exp();
     let l = combine(&active_units, &k, n)?;
-    let mut masses: Vec<f64> = reference.iter().map(|m| s * m).collect();
+    let mut masses: Vec<f64> = modal.masses.iter().map(|m| s * m).collect();
     let omega1 = lowest_frequency(&l, &masses)?;
     let omega1_dnurbs = modal.report.omega1_dnurbs;
     let mass_scale = (omega1 / omega1_dnurbs).powi(2);
     masses.iter_mut().for_each(|m| *m *= mass_scale);
-    let mut constants = Constants::new();
+    let mut scales = Constants::new();
     for &c in classes {
-        constants.set(c, 0.0);
+        scales.set(c, 0.0);
     }
     for (&c, &kc) in active.iter().zip(&k) {
-        constants.set(classes[c], kc);
+        scales.set(classes[c], kc);
     }
+    let modal_constants = &modal.report.constants;
+    let constants = Constants::from_pairs(
+        classes
+            .iter()
+            .map(|&c| (c, scales.value(c) * modal_constants.value(c))),
+    );
     let l_modal = combine(
         &units.iter().collect::<Vec<_>>(),
-        &modal.constants.values_of(classes),
+        &vec![1.0; units.len()],
         n,
     )?;
-    let dt_modal = 2.0 / highest_frequency(&l_modal, &modal.masses);
-    let dt_here = 2.0 / highest_frequency(&l, &masses);
+    let dt_modal = 2.0 / highest_frequency(&l_modal, &modal.masses)?;
+    let dt_here = 2.0 / highest_frequency(&l, &masses)?;
+    let refined: Vec<Class> = active.iter().map(|&c| classes[c]).collect();
     let warnings = overfit_warnings(
-        &active.iter().map(|&c| classes[c]).collect::<Vec<_>>(),
-        &k,
-        &modal.constants,
+        &refined,
+        &refined
+            .iter()
+            .map(|&c| constants.value(c))
+            .collect::<Vec<_>>(),
+        modal_constants,
         (dt_modal, dt_here),
     );
     Ok(ExcitationSolution {
         report: ExcitationReport {
-            classes: active.iter().map(|&c| classes[c]).collect(),
-            constants: constants.clone(),
-            modal_constants: modal.constants.clone(),
+            classes: refined,
+            constants,
+            modal_constants: modal_constants.clone(),
             modes: amplitude
                 .iter()
                 .map(|&(i, a2)| (i + 1, a2 / total))
@@ -272,7 +269,7 @@ pub fn excitation_fit(
             mass_scale,
             dt_critical: (dt_modal, dt_here),
         },
-        constants,
+        scales,
         masses,
         warnings,
     })
@@ -303,6 +300,15 @@ fn overfit_warnings(
         ));
     }
     warnings
+}
+
+/// `Σ_c k_c L_c`.
+fn combine(units: &[&SparseMatrix], k: &[f64], n: usize) -> Result<SparseMatrix, DeriveError> {
+    let mut acc = SparseMatrix::zeros(n, n);
+    for (u, &kc) in units.iter().zip(k) {
+        acc = SparseMatrix::linear_combination(1.0, &acc, kc, u)?;
+    }
+    Ok(acc)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -368,7 +374,7 @@ mod tests {
                         "k {k}, m {m}, mode {j}: {w} vs {e}"
                     );
                 }
-                let top = highest_frequency(&l, &vec![m; n]);
+                let top = highest_frequency(&l, &vec![m; n]).unwrap();
                 let e = exact(k, m, n);
                 assert!((top - e).abs() < 1e-6 * e, "k {k}, m {m}: {top} vs {e}");
             }

@@ -1,12 +1,15 @@
 //! Non-negative least squares on the normal equations of a problem whose unknowns are a few
-//! class constants and many node masses (the modal fit, docs/math.md §8): the active-set
-//! method of Lawson–Hanson in the normal-equation form of Bro & De Jong (1997), with every
-//! passive-set system solved through its structure,
+//! constants and many node masses: the active-set method of Lawson–Hanson in the
+//! normal-equation form of Bro & De Jong (1997), with every passive-set system solved through
+//! its structure,
 //!
 //! `H = [[H_kk, H_km], [H_mk, diag(d) + SᵀS]]`, `S` a few rows,
 //!
 //! by the Woodbury identity on the mass block and a Schur complement on the constants, so a
-//! solve costs `O(n (c + r)²)` for `n` masses, `c` constants and `r` rows of `S`.
+//! solve costs `O(n (c + r)²)` for `n` masses, `c` constants and `r` rows of `S`. The modal
+//! fit (docs/math.md §8.3), whose masses are bounded only from below and rarely reach the
+//! bound, eliminates them once itself and solves its reduced problem here with no mass block
+//! (`n = 0`), a dense NNLS in its group factors.
 
 use nurbspring_linalg::{DenseMatrix, cholesky_solve_dense, solve_dense};
 

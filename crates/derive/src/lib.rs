@@ -57,20 +57,23 @@ mod validation;
 
 pub use error::DeriveError;
 pub use evaluation::{
-    DnurbsModes, PERIODS, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, horizon,
+    DnurbsModes, LINEAR_RANGE, MATCH_WINDOW, PERIODS, REGIME_FREQUENCY, REGIME_MODES, TABLE_MODES,
+    WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_MODE_FREQUENCY, WARN_RELATIVE_RMS, horizon,
 };
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use linear::derive_linear;
 pub use mass::{distinct_non_null, mass_eigenvalues};
 pub use modal::{
-    MASS_FLOOR, MASS_REGULARIZATION, MODES, ModalFitReport, ModalSolution, SampledMode,
-    lowest_frequency, modal_fit,
+    Band, CONSTANT_REGULARIZATION, ElementPrior, FITTED_MODES, FREQUENCY_WEIGHT, FitGroup,
+    GroupFit, MASS_FLOOR, MASS_REGULARIZATION, MIN_HALF_WAVES, ModalFitReport, ModalSolution,
+    RINGS, SampledMode, TOTAL_MASS_WEIGHT, element_priors, lowest_frequency, modal_fit,
+    resolved_modes,
 };
 pub use modal_solution::{DENSE_MODES, ModalBasis, TRUNCATED_MODES};
 pub use omega::{NodeState, Omega};
 pub use outcome::{
     Derivation, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport,
-    ModalTruncation, NodeReduction, ParameterSet, ProbeError, ReductionReport, Spectrum,
+    ModalTruncation, NodeReduction, ParameterSet, ProbeError, ReductionReport, Regime, Spectrum,
     TrustRegionReport, Validation,
 };
 pub use pipeline::{
@@ -83,4 +86,7 @@ pub use scalar::{EnergyOrigin, ScalarSystem};
 pub use setup::{
     Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Method, Setup, TimeSettings,
 };
-pub use validation::{Comparison, Trajectory, compare, compare_points, dominant_period, mac};
+pub use validation::{
+    Comparison, REPEATED_FREQUENCY, Trajectory, compare, compare_points, dominant_period, mac,
+    match_modes,
+};

@@ -11,11 +11,11 @@ use nurbspring_msm::{Class, Constants, SpringLattice};
 
 use crate::DeriveError;
 use crate::evaluation::{
-    DnurbsModes, frequency_table, impulse, initial_speed, node_watch, triplicate, unloaded,
-    validation, warnings, with_totals,
+    DnurbsModes, REGIME_MODES, frequency_table, impulse, initial_speed, matched_modes, node_watch,
+    regime, triplicate, unloaded, validation, warnings, with_totals,
 };
 use crate::excitation::excitation_fit;
-use crate::modal::{MODES, SampledMode, modal_fit};
+use crate::modal::{FITTED_MODES, SampledMode, element_priors, modal_fit};
 use crate::modal_solution::ModalBasis;
 use crate::nodes::NodeMap;
 use crate::outcome::{
@@ -28,10 +28,45 @@ use crate::setup::{Config, Method, Setup};
 
 /// A load below this fraction of the largest is no load (round-off).
 const NO_LOAD: f64 = 1e-12;
+/// D-NURBS modes sampled at the nodes for the modal fit to choose from.
+const CANDIDATE_MODES: usize = 4 * FITTED_MODES;
 
-/// The mass of each node's dual cell in parameter space, `μ τ_u τ_v` (times `|c_u × c_v|`
-/// under area integration; a chain: `μ τ_u`).
-fn dual_cell_masses(setup: &Setup, config: &Config) -> Result<Vec<f64>, DeriveError> {
+/// The area factor of each lattice node: `|c_u × c_v|` (a curve: `|c_u|`) at its `(u, v)`
+/// under area integration, 1 under the parameter measure.
+fn area_factors(setup: &Setup, config: &Config) -> Result<Vec<f64>, DeriveError> {
+    let lattice = setup.lattice();
+    let params = lattice
+        .params
+        .as_ref()
+        .ok_or(DeriveError::LatticeWithoutParameters)?;
+    if config.dnurbs.integration != Integration::Area {
+        return Ok(vec![1.0; params.len()]);
+    }
+    params
+        .iter()
+        .map(|&(u, v)| -> Result<f64, DeriveError> {
+            Ok(match setup.model().geometry() {
+                nurbspring_dnurbs::Geometry::Surface(s) => {
+                    let d = s.derivatives(u, v, 1)?;
+                    let c = [
+                        d.u[1] * d.v[2] - d.u[2] * d.v[1],
+                        d.u[2] * d.v[0] - d.u[0] * d.v[2],
+                        d.u[0] * d.v[1] - d.u[1] * d.v[0],
+                    ];
+                    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+                }
+                nurbspring_dnurbs::Geometry::Curve(c) => {
+                    let d = c.derivatives(u, 1)?.u;
+                    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+                }
+            })
+        })
+        .collect()
+}
+
+/// The mass of each node's dual cell in parameter space, `μ τ_u τ_v` times its area factor
+/// (a chain: `μ τ_u`).
+fn dual_cell_masses(setup: &Setup, config: &Config, area: &[f64]) -> Result<Vec<f64>, DeriveError> {
     let lattice = setup.lattice();
     let (n_u, n_v) = lattice.grid.unwrap_or((lattice.n_nodes(), 1));
     let params = lattice
@@ -51,31 +86,10 @@ fn dual_cell_masses(setup: &Setup, config: &Config) -> Result<Vec<f64>, DeriveEr
     let us: Vec<f64> = (0..n_u).map(|i| params[i * n_v].0).collect();
     let vs: Vec<f64> = (0..n_v).map(|j| params[j].1).collect();
     let (tu, tv) = (dual(&us), dual(&vs));
-    let area = config.dnurbs.integration == Integration::Area;
     let mut out = Vec::with_capacity(lattice.n_nodes());
     for i in 0..n_u {
         for j in 0..n_v {
-            let (u, v) = params[i * n_v + j];
-            let jac = if area {
-                match setup.model().geometry() {
-                    nurbspring_dnurbs::Geometry::Surface(s) => {
-                        let d = s.derivatives(u, v, 1)?;
-                        let c = [
-                            d.u[1] * d.v[2] - d.u[2] * d.v[1],
-                            d.u[2] * d.v[0] - d.u[0] * d.v[2],
-                            d.u[0] * d.v[1] - d.u[1] * d.v[0],
-                        ];
-                        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
-                    }
-                    nurbspring_dnurbs::Geometry::Curve(c) => {
-                        let d = c.derivatives(u, 1)?.u;
-                        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-                    }
-                }
-            } else {
-                1.0
-            };
-            out.push(config.material.mu * tu[i] * tv[j] * jac);
+            out.push(config.material.mu * tu[i] * tv[j] * area[i * n_v + j]);
         }
     }
     Ok(out)
@@ -175,21 +189,79 @@ fn node_loads(
     out
 }
 
-/// The linear classes of the lattice with their unit matrices on the free nodes.
-fn class_units(lattice: &SpringLattice, free: &[usize]) -> (Vec<Class>, Vec<SparseMatrix>) {
+/// The element classes of `lattice` with the stiffness of each, every element with its own
+/// constant, on the free nodes.
+fn class_stiffness(lattice: &SpringLattice, free: &[usize]) -> (Vec<Class>, Vec<SparseMatrix>) {
     let classes: Vec<Class> = lattice
         .classes()
         .into_iter()
         .filter(|c| matches!(c, Class::Linear(..)))
         .collect();
-    let units = classes
+    let stiffness = classes
         .iter()
-        .map(|&c| lattice.linear_matrix(Some(c)).submatrix(free, free))
+        .map(|&c| {
+            let mut only = lattice.clone();
+            only.elements.retain(|e| e.class() == c);
+            only.linear_matrix(None).submatrix(free, free)
+        })
         .collect();
-    (classes, units)
+    (classes, stiffness)
 }
 
-/// The lowest non-rigid D-NURBS modes sampled at the free nodes.
+/// The D-NURBS's static deflection `Ω_ff K⁻¹ f` at the free nodes under its constant load;
+/// `None` when nothing is loaded or K is singular (a body free to move).
+fn static_deflection(modes: &DnurbsModes, map: &NodeMap) -> Option<Vec<[f64; 3]>> {
+    let load = &modes.system.load;
+    if load.iter().flatten().all(|&x| x == 0.0) {
+        return None;
+    }
+    let solution = modes.basis.static_solve(load)?;
+    let mut out = vec![[0.0; 3]; map.free.len()];
+    for x in 0..3 {
+        let column: Vec<f64> = solution.iter().map(|u| u[x]).collect();
+        for (o, v) in out.iter_mut().zip(map.at_nodes(&column)) {
+            o[x] = v;
+        }
+    }
+    Some(out)
+}
+
+/// The node forces that make the static deflection of the linear model `L` with masses
+/// `masses` under gravity `g` the D-NURBS's, `F = L X − m g` (docs/math.md §8.2), on every
+/// lattice node (zero at fixed ones).
+fn static_forces(
+    l: &SparseMatrix,
+    masses: &[f64],
+    g: [f64; 3],
+    deflection: &[[f64; 3]],
+    map: &NodeMap,
+    nodes: usize,
+) -> Vec<[f64; 3]> {
+    let mut out = vec![[0.0; 3]; nodes];
+    for x in 0..3 {
+        let column: Vec<f64> = deflection.iter().map(|d| d[x]).collect();
+        let mut lx = vec![0.0; column.len()];
+        l.mul_vec(&column, &mut lx);
+        for (i, &a) in map.free.iter().enumerate() {
+            out[a][x] = lx[i] - masses[i] * g[x];
+        }
+    }
+    out
+}
+
+/// The mean constant of each element class of a lattice whose elements carry their own
+/// constants.
+fn class_means(lattice: &SpringLattice) -> Constants {
+    let mut sums: std::collections::BTreeMap<Class, (f64, usize)> = Default::default();
+    for e in &lattice.elements {
+        let entry = sums.entry(e.class()).or_insert((0.0, 0));
+        entry.0 += e.k;
+        entry.1 += 1;
+    }
+    Constants::from_pairs(sums.into_iter().map(|(c, (s, n))| (c, s / n as f64)))
+}
+
+/// The lowest `count` non-rigid D-NURBS modes sampled at the free nodes.
 pub(crate) fn sampled_modes(modes: &DnurbsModes, map: &NodeMap, count: usize) -> Vec<SampledMode> {
     (0..modes.basis.len())
         .filter(|&i| modes.basis.omega[i] > 0.0)
@@ -214,6 +286,7 @@ fn node_system(
     stiffness: SparseMatrix,
     load: Vec<[f64; 3]>,
     damping_ratio: f64,
+    basis: Option<ModalBasis>,
 ) -> Result<NodeModel, DeriveError> {
     let nodes = setup.node_state();
     let pick = |v: &[[f64; 3]]| -> Vec<[f64; 3]> {
@@ -233,7 +306,10 @@ fn node_system(
         displacement,
         velocity: pick(&nodes.velocities),
     };
-    let basis = ModalBasis::new(&system.stiffness, &system.mass)?;
+    let basis = match basis {
+        Some(b) => b,
+        None => ModalBasis::new(&system.stiffness, &system.mass)?,
+    };
     Ok(NodeModel { system, basis })
 }
 
@@ -333,14 +409,25 @@ pub fn derive_linear(
     let setup = Setup::new(config)?;
     let modes = DnurbsModes::new(&setup, method.name())?;
     let map = NodeMap::new(&setup, &modes)?;
-    let dual = dual_cell_masses(&setup, config)?;
+    let area = area_factors(&setup, config)?;
+    let dual = dual_cell_masses(&setup, config, &area)?;
     let pullback = Pullback::new(&map, &modes, &dual);
     let mut warn = Vec::new();
-    let forces = node_loads(&setup, config, &modes, &pullback, &mut warn);
+    // A fitted model holds the D-NURBS's static deflection (its node forces are made for it);
+    // otherwise, and for the reduction, the loads are carried by `Ω_ff⁻ᵀ`.
+    let deflection = match method {
+        Method::Modal | Method::Excitation => static_deflection(&modes, &map),
+        _ => None,
+    };
+    let forces = if deflection.is_some() {
+        Vec::new()
+    } else {
+        node_loads(&setup, config, &modes, &pullback, &mut warn)
+    };
     let cancelled = || cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed));
     let ratio = modes.system.damping_ratio;
     let g = config.loads.gravity;
-    let free_forces = |masses: &[f64]| -> Vec<[f64; 3]> {
+    let free_forces = |masses: &[f64], forces: &[[f64; 3]]| -> Vec<[f64; 3]> {
         map.free
             .iter()
             .zip(masses)
@@ -352,44 +439,66 @@ pub fn derive_linear(
     };
     let (lattice, reduction_model, fit, node, rule) = match method {
         Method::Modal | Method::Excitation => {
-            let (classes, units) = class_units(setup.lattice(), &map.free);
-            let sampled = sampled_modes(&modes, &map, MODES);
-            let modal = modal_fit(&classes, &units, &sampled, &pullback.reference)?;
-            let (constants, masses, fit) = if method == Method::Excitation {
-                let e =
-                    excitation_fit(&modes, &map, &classes, &units, &modal, &pullback.reference)?;
+            let priors =
+                element_priors(setup.lattice(), config.material.stiffness_by_slot(), &area);
+            let candidates = sampled_modes(&modes, &map, CANDIDATE_MODES);
+            let modal = modal_fit(
+                setup.lattice(),
+                &map.free,
+                &priors,
+                &candidates,
+                &pullback.reference,
+            )?;
+            // The fitted lattice: every element with its own constant, those left at 0 gone.
+            let mut lattice = setup.lattice().clone();
+            for (e, &k) in lattice.elements.iter_mut().zip(&modal.constants) {
+                e.k = k;
+            }
+            lattice.elements.retain(|e| e.k > 0.0);
+            let (masses, fit, basis) = if method == Method::Excitation {
+                let (classes, stiffness) = class_stiffness(&lattice, &map.free);
+                let e = excitation_fit(
+                    &modes,
+                    &map,
+                    &classes,
+                    &stiffness,
+                    &modal,
+                    &pullback.reference,
+                )?;
                 warn.extend(e.warnings.iter().cloned());
-                (
-                    e.constants.clone(),
-                    e.masses.clone(),
-                    FitDetail::Excitation(e.report),
-                )
+                for el in &mut lattice.elements {
+                    el.k *= e.scales.value(el.class());
+                }
+                (e.masses.clone(), FitDetail::Excitation(e.report), None)
             } else {
+                // The fit's own modes are the model's: L and the masses are the same.
                 (
-                    modal.constants.clone(),
                     modal.masses.clone(),
                     FitDetail::Modal(modal.report),
+                    Some(modal.basis),
                 )
             };
-            let mut lattice = setup.lattice().clone();
-            lattice.set_constants(&constants);
             let mut all = dual.clone();
             for (i, &a) in map.free.iter().enumerate() {
                 all[a] = masses[i];
             }
             lattice.damping = all.iter().map(|m| ratio * m).collect();
             lattice.masses = all;
-            lattice.forces = forces.clone();
             let l = lattice.linear_matrix(None).submatrix(&map.free, &map.free);
+            lattice.forces = match &deflection {
+                Some(x) => static_forces(&l, &masses, g, x, &map, lattice.n_nodes()),
+                None => forces.clone(),
+            };
             let node = node_system(
                 &setup,
                 &map,
                 SparseMatrix::from_diagonal(&masses),
                 l,
-                free_forces(&masses),
+                free_forces(&masses, &lattice.forces),
                 ratio,
+                basis,
             )?;
-            let rule = "masses fitted jointly with the class constants to the lowest D-NURBS modes, then scaled so that the lowest frequency matches".to_string();
+            let rule = "one mass per free node, fitted with the element constants to the D-NURBS modes the lattice resolves near the reference masses (row sums of M_T), then scaled so that the lowest frequency matches".to_string();
             (Some(lattice), None, fit, node, rule)
         }
         Method::Reduction => {
@@ -402,6 +511,7 @@ pub fn derive_linear(
                 symmetric_sparse(&k_t),
                 f_t.clone(),
                 ratio,
+                None,
             )?;
             let lattice = setup.lattice();
             let reduction = NodeReduction {
@@ -472,6 +582,11 @@ pub fn derive_linear(
         judge.dt,
     );
     let frequencies = frequency_table(&modes.basis, &map.omega_ff, &node.basis);
+    let regime = regime(
+        &setup,
+        &reference.0,
+        &matched_modes(&modes.basis, &map.omega_ff, &node.basis, REGIME_MODES),
+    );
     let spectrum = Spectrum {
         dnurbs: triplicate(&modes.basis.omega),
         msm: triplicate(&node.basis.omega),
@@ -509,7 +624,7 @@ pub fn derive_linear(
     let derived = ParameterSet {
         constants: lattice
             .as_ref()
-            .map(SpringLattice::constants)
+            .map(class_means)
             .unwrap_or_else(Constants::new),
         m: mean,
         omega_max,
@@ -531,6 +646,7 @@ pub fn derive_linear(
         &frequencies,
         &mass,
         &[],
+        &regime,
     ));
     let derivation = Derivation {
         method,
@@ -543,6 +659,7 @@ pub fn derive_linear(
         given_trajectory: None,
         second_excitation,
         frequencies,
+        regime,
         probes: setup.probes().to_vec(),
         probe_nodes: setup.probe_nodes().to_vec(),
         dnurbs_trajectory: reference.0,

@@ -204,7 +204,7 @@ impl ModalBasis {
 
     /// `K⁻¹ x` per coordinate, or `None` when K is singular (a rigid mode among those found;
     /// they are the lowest, so a truncated basis has them all). K is factored once.
-    fn static_solve(&self, x: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
+    pub(crate) fn static_solve(&self, x: &[[f64; 3]]) -> Option<Vec<[f64; 3]>> {
         if self.lambda.first() == Some(&0.0) {
             return None;
         }

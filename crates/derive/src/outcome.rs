@@ -186,17 +186,36 @@ pub struct Spectrum {
 /// their shapes are at the nodes.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrequencyRow {
-    /// Mode number, 1 = lowest.
+    /// D-NURBS mode number, 1 = lowest.
     pub mode: usize,
     /// D-NURBS angular frequency.
     pub dnurbs: f64,
-    /// MSM angular frequency of the same rank.
+    /// The MSM mode matched to it (by MAC where the MSM's modes are isotropic triplets,
+    /// else by rank), 1 = lowest.
+    pub msm_mode: usize,
+    /// Its angular frequency.
     pub msm: f64,
     /// `msm / dnurbs − 1`.
     pub relative_difference: f64,
     /// MAC of the two shapes at the free nodes (none when the MSM's modes are not the
     /// isotropic triplets of a linear model).
     pub mac: Option<f64>,
+}
+
+/// The regime a derived model may be used in (docs/math.md §8.7).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Regime {
+    /// The D-NURBS modes up to this angular frequency each have a matched MSM mode within 1%
+    /// (0: not even the lowest).
+    pub frequency: f64,
+    /// How many D-NURBS modes that is.
+    pub modes: usize,
+    /// The surface's size: the diagonal of its lattice's bounding box at rest.
+    pub size: f64,
+    /// The linear range: displacements up to this (a share of the size).
+    pub amplitude: f64,
+    /// The largest displacement of the D-NURBS at the probes in the scene's own run.
+    pub motion: f64,
 }
 
 /// The exact reduction of the D-NURBS onto the free nodes (the `reduction` derivation): a
@@ -270,6 +289,8 @@ pub struct Derivation {
     pub second_excitation: Validation,
     /// Lowest frequencies of both models, side by side.
     pub frequencies: Vec<FrequencyRow>,
+    /// The regime the model may be used in.
+    pub regime: Regime,
     /// Probe parameters `(u, v)` (those of the probe nodes), the centre first.
     pub probes: Vec<(f64, f64)>,
     /// Lattice node of each probe.
@@ -331,11 +352,12 @@ pub struct TrustRegionReport {
 /// What the excitation-aware fit reports.
 #[derive(Clone, Debug, Serialize)]
 pub struct ExcitationReport {
-    /// The classes refined.
+    /// The classes refined (each element's constant is the modal fit's times its class's
+    /// scale).
     pub classes: Vec<Class>,
-    /// Their constants.
+    /// The mean element constant of each class.
     pub constants: Constants,
-    /// The modal fit it started from.
+    /// The same of the modal fit it started from.
     pub modal_constants: Constants,
     /// The D-NURBS modes weighted (1 = lowest) and their shares of the motion.
     pub modes: Vec<(usize, f64)>,

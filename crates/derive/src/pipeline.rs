@@ -13,7 +13,7 @@ use nurbspring_sim::{DynamicModel, IntegratorKind, RunOptions, Schedule, Stabili
 use crate::DeriveError;
 use crate::evaluation::{
     DnurbsModes, TABLE_MODES, dnurbs_impulse_run, dnurbs_watch, horizon, impulse, initial_speed,
-    validation, warnings, with_totals,
+    regime, validation, warnings, with_totals,
 };
 use crate::fit::{FitDofs, FitResult};
 use crate::mass::{mass_eigenvalues, mass_eigenvalues_computable};
@@ -573,6 +573,7 @@ pub fn derive_msm(
         .filter(|&(_, k)| k == 0.0)
         .map(|(c, _)| c.symbol())
         .collect();
+    let regime = regime(&setup, &reference.0, &frequencies);
     let warnings = warnings(
         Method::Paper,
         &derived.validation,
@@ -580,6 +581,7 @@ pub fn derive_msm(
         &frequencies,
         &mass,
         &clamped,
+        &regime,
     );
     let derivation = Derivation {
         method: Method::Paper,
@@ -592,6 +594,7 @@ pub fn derive_msm(
         given_trajectory,
         second_excitation,
         frequencies,
+        regime,
         probes: setup.probes().to_vec(),
         probe_nodes: setup.probe_nodes().to_vec(),
         dnurbs_trajectory: reference.0,
@@ -623,6 +626,7 @@ fn paper_frequencies(spectrum: &Spectrum) -> Vec<FrequencyRow> {
         .map(|(i, (&d, &m))| FrequencyRow {
             mode: i + 1,
             dnurbs: d,
+            msm_mode: i + 1,
             msm: m,
             relative_difference: m / d - 1.0,
             mac: None,

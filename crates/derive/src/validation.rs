@@ -299,6 +299,94 @@ pub fn mac(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
+/// Frequencies within this relative distance are one repeated frequency for the matching
+/// of modes: its shapes are any rotation of one subspace.
+pub const REPEATED_FREQUENCY: f64 = 1e-6;
+
+/// The candidate matched to each reference mode by MAC, and that MAC: `reference` are the
+/// shapes of the reference modes with their frequencies `omega` (ascending), `candidates` the
+/// shapes of the other model's modes (ascending). A repeated frequency (within
+/// [`REPEATED_FREQUENCY`]) is matched as a subspace: a candidate's MAC with it is
+/// `|Qᵀψ|²/|ψ|²`, Q an orthonormal basis of the repeated modes' shapes (the plain MAC for a
+/// single mode), and the repeated modes take that many candidates, in frequency order.
+/// Pairs are taken greedily, the largest MAC first; a reference left without a candidate
+/// (fewer candidates than references) gets none.
+///
+/// ```
+/// use nurbspring_derive::match_modes;
+/// // A repeated pair spanned by e1, e2 and a single mode e3; the candidates come as
+/// // (e3, a rotation of the pair, the other rotation).
+/// let s = std::f64::consts::FRAC_1_SQRT_2;
+/// let reference = vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0], vec![0.0, 0.0, 1.0]];
+/// let candidates = vec![vec![0.0, 0.0, 1.0], vec![s, s, 0.0], vec![s, -s, 0.0]];
+/// let m = match_modes(&reference, &[1.0, 1.0, 2.0], &candidates);
+/// assert_eq!(m[2], Some((0, 1.0)));
+/// let (a, b) = (m[0].unwrap(), m[1].unwrap());
+/// assert_eq!((a.0, b.0), (1, 2));
+/// assert!((a.1 - 1.0).abs() < 1e-15 && (b.1 - 1.0).abs() < 1e-15);
+/// ```
+pub fn match_modes(
+    reference: &[Vec<f64>],
+    omega: &[f64],
+    candidates: &[Vec<f64>],
+) -> Vec<Option<(usize, f64)>> {
+    let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+    // Clusters of repeated frequencies, each with an orthonormal basis of its shapes.
+    let mut clusters: Vec<(Vec<usize>, Vec<Vec<f64>>)> = Vec::new();
+    for (i, shape) in reference.iter().enumerate() {
+        let repeated = clusters.last().is_some_and(|(members, _)| {
+            let w = omega[members[0]];
+            (omega[i] - w).abs() <= REPEATED_FREQUENCY * omega[i].abs().max(w.abs())
+        });
+        if !repeated {
+            clusters.push((Vec::new(), Vec::new()));
+        }
+        let (members, basis) = clusters.last_mut().expect("a cluster was pushed");
+        members.push(i);
+        // Gram–Schmidt, twice for round-off.
+        let mut v = shape.clone();
+        for _ in 0..2 {
+            for q in basis.iter() {
+                let c = dot(&v, q);
+                v.iter_mut().zip(q).for_each(|(a, b)| *a -= c * b);
+            }
+        }
+        let norm = dot(&v, &v).sqrt();
+        if norm > 1e-12 * dot(shape, shape).sqrt() {
+            basis.push(v.iter().map(|a| a / norm).collect());
+        }
+    }
+    let mut score: Vec<(f64, usize, usize)> = Vec::new();
+    for (c, (_, basis)) in clusters.iter().enumerate() {
+        for (j, psi) in candidates.iter().enumerate() {
+            let nn = dot(psi, psi);
+            let m = if nn > 0.0 {
+                basis.iter().map(|q| dot(q, psi).powi(2)).sum::<f64>() / nn
+            } else {
+                0.0
+            };
+            score.push((m, c, j));
+        }
+    }
+    score.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
+    let mut taken = vec![false; candidates.len()];
+    let mut chosen: Vec<Vec<(usize, f64)>> = vec![Vec::new(); clusters.len()];
+    for (m, c, j) in score {
+        if !taken[j] && chosen[c].len() < clusters[c].0.len() {
+            taken[j] = true;
+            chosen[c].push((j, m));
+        }
+    }
+    let mut out = vec![None; reference.len()];
+    for ((members, _), mut picks) in clusters.into_iter().zip(chosen) {
+        picks.sort_by_key(|p| p.0);
+        for (i, pick) in members.into_iter().zip(picks) {
+            out[i] = Some(pick);
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod point_tests {
     use super::*;

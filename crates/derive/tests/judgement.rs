@@ -247,11 +247,15 @@ fn check_judgement(d: &Derivation, setup: &Setup, config: &Config) {
             row.dnurbs,
             dnurbs[i]
         );
+        // The MSM mode matched to it (by MAC for linear elements, by rank for springs).
+        if config.method == Method::Paper {
+            assert_eq!(row.msm_mode, i + 1);
+        }
         assert!(
-            close(row.msm, msm[i], 1e-8),
+            close(row.msm, msm[row.msm_mode - 1], 1e-8),
             "{i}: {} vs {}",
             row.msm,
-            msm[i]
+            msm[row.msm_mode - 1]
         );
         assert!(close(
             row.relative_difference,
@@ -604,8 +608,26 @@ fn check_excitation(config: &Config) {
     };
     let mac = nurbspring_derive::mac;
     let norm = |x: &[f64]| dot(x, x).sqrt();
+    // The class scales of a lattice against the modal fit: its classes' mean constants over
+    // the modal fit's (every element of a class carries the same scale).
+    let class_mean = |lattice: &nurbspring_msm::SpringLattice, c: Class| {
+        let k: Vec<f64> = lattice
+            .elements
+            .iter()
+            .filter(|e| e.class() == c)
+            .map(|e| e.k)
+            .collect();
+        k.iter().sum::<f64>() / k.len() as f64
+    };
+    let log_scales = |lattice: &nurbspring_msm::SpringLattice| -> Vec<f64> {
+        report
+            .classes
+            .iter()
+            .map(|&c| (class_mean(lattice, c) / report.modal_constants.value(c)).ln())
+            .collect()
+    };
     let objective =
-        |l: &nurbspring_linalg::DenseMatrix, masses: &[f64]| {
+        |l: &nurbspring_linalg::DenseMatrix, masses: &[f64], log_scales: &[f64]| {
             let nf = masses.len();
             let m = nurbspring_linalg::DenseMatrix::from_fn(nf, nf, |a, b| {
                 if a == b { masses[a] } else { 0.0 }
@@ -634,21 +656,23 @@ fn check_excitation(config: &Config) {
                     residual.push(weight * (a / na - sign * b / nb));
                 }
             }
+            // The pull of each class scale towards the modal fit's.
+            residual.extend(log_scales.iter().map(|t| 0.1 * t));
             norm(&residual)
         };
     let masses: Vec<f64> = free_nodes
         .iter()
         .map(|&a| lattice.masses[a] / report.mass_scale)
         .collect();
-    let recomputed = objective(&scalar_stiffness(lattice), &masses);
+    let recomputed = objective(&scalar_stiffness(lattice), &masses, &log_scales(lattice));
     assert!(
         close(report.residual.1, recomputed, 1e-6),
         "reported {} vs recomputed {recomputed}",
         report.residual.1
     );
     // Levenberg–Marquardt stops early only where it can no longer descend: then no step of
-    // 10⁻³ in any log-constant or in the log mass scale lowers the objective (beyond a relative
-    // 10⁻⁶). Otherwise it has used all its 40 iterations.
+    // 10⁻³ in any log class scale or in the log mass scale lowers the objective (beyond a
+    // relative 10⁻⁶). Otherwise it has used all its 40 iterations.
     if report.iterations < 40 {
         let at = recomputed;
         let delta = 1e-3f64;
@@ -656,34 +680,32 @@ fn check_excitation(config: &Config) {
             let factor = (sign * delta).exp();
             for &c in &report.classes {
                 let mut probe = lattice.clone();
-                let mut constants = report.constants.clone();
-                constants.set(c, factor * constants.value(c));
-                probe.set_constants(&constants);
-                let f = objective(&scalar_stiffness(&probe), &masses);
+                for e in probe.elements.iter_mut().filter(|e| e.class() == c) {
+                    e.k *= factor;
+                }
+                let f = objective(&scalar_stiffness(&probe), &masses, &log_scales(&probe));
                 assert!(f >= at * (1.0 - 1e-6), "{}: {f} below {at}", c.symbol());
             }
             let scaled: Vec<f64> = masses.iter().map(|m| factor * m).collect();
-            let f = objective(&scalar_stiffness(lattice), &scaled);
+            let f = objective(&scalar_stiffness(lattice), &scaled, &log_scales(lattice));
             assert!(f >= at * (1.0 - 1e-6), "mass scale: {f} below {at}");
         }
     }
-    // The start: the modal fit's constants (the modal derivation's lattice) and the reference
-    // masses scaled by their mean ratio to the modal fit's. The excitation's masses are the
-    // reference ones times one factor, which cancels: start_a = mean_b(modal_b / e_b) · e_a.
+    // The start: the modal fit's constants and masses (the modal derivation's lattice), the
+    // scales all 1.
     let mut modal_config = config.clone();
     modal_config.method = Method::Modal;
     let (modal, _) = derive_linear(&modal_config, None).unwrap();
     let modal_lattice = modal.lattice.as_ref().unwrap();
-    let ratio = free_nodes
-        .iter()
-        .map(|&a| modal_lattice.masses[a] / lattice.masses[a])
-        .sum::<f64>()
-        / free_nodes.len() as f64;
     let start: Vec<f64> = free_nodes
         .iter()
-        .map(|&a| ratio * lattice.masses[a])
+        .map(|&a| modal_lattice.masses[a])
         .collect();
-    let recomputed = objective(&scalar_stiffness(modal_lattice), &start);
+    let recomputed = objective(
+        &scalar_stiffness(modal_lattice),
+        &start,
+        &vec![0.0; report.classes.len()],
+    );
     assert!(
         close(report.residual.0, recomputed, 1e-9),
         "reported start {} vs recomputed {recomputed}",

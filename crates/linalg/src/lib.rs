@@ -51,5 +51,7 @@ pub use eigen::{
 };
 pub use error::LinalgError;
 pub use lstsq::{affine_solution_space, least_squares, nonnegative_least_squares};
-pub use solvers::{LuSolver, SpdSolver, cholesky_solve_dense, solve_dense};
+pub use solvers::{
+    LuSolver, SpdSolver, cholesky_solve_dense, cholesky_solve_dense_columns, solve_dense,
+};
 pub use sparse::{ShiftedSum, SparseMatrix};

@@ -1,6 +1,6 @@
 //! Linear isotropic elements (docs/math.md §8): zero-rest-length ("vector") springs along u,
-//! along v and on both diagonals of each cell, 3-node bending stencils along u and v, and a
-//! 4-node twist stencil per cell.
+//! along v and on both diagonals of each cell, 3-node bending stencils along u and v, 4-node
+//! third-difference stencils along u and v, and a 4-node twist stencil per cell.
 //!
 //! An element acts on the displacements `u_i = x_i − x_i(0)` of its nodes with the energy
 //! `E = ½ k w |Σ_i c_i u_i|²`: `k` is its class constant, `w` its weight and `c` its stencil
@@ -15,12 +15,19 @@
 //! - bending along u over `(a−1, b), (a, b), (a+1, b)`: `c` the second divided difference
 //!   `(2/(h₁(h₁+h₂)), −2/(h₁h₂), 2/(h₂(h₁+h₂)))`, `w = τ_u(a) τ_v(b)`;
 //! - twist of cell `(a, b)` over `(a, b), (a+1, b), (a, b+1), (a+1, b+1)`:
-//!   `c = (1, −1, −1, 1) / (h_u h_v)`, `w = h_u h_v`.
+//!   `c = (1, −1, −1, 1) / (h_u h_v)`, `w = h_u h_v`;
+//! - third difference along u over `(a−1, b), …, (a+2, b)`: `c` the third derivative of the
+//!   cubic through the four nodes (`6 ×` the third divided difference), `w = h'_u(a) τ_v(b)`
+//!   with `h'_u(a) = h_u(a)`, plus `h_u(0)` for the first stencil and the last interval's
+//!   length for the last (the stencils sit on the inner intervals; the two end intervals
+//!   are counted with their neighbours, so that the sum stays a second-order quadrature).
 //!
 //! With these weights the energy of a smooth displacement field tends to the D-NURBS energy
 //! `½ ∫∫ α11 |c_u|² + α22 |c_v|² + β11 |c_uu|² + β12 |c_uv|² + β22 |c_vv|²` when the constants
 //! are `k = α11, α22, β11, β22, β12` (and a diagonal class with `k = α` stands for
-//! `α11 = α22 = α` on a square cell).
+//! `α11 = α22 = α` on a square cell). A third-difference element stands for `|c_uuu|²`, a
+//! term the D-NURBS does not have: with `k = β11 h²/6` it cancels the leading error
+//! `−β11 h² |c_uuu|²/6` of the bending stencil on a uniform lattice (docs/math.md §8.3).
 
 use serde::{Deserialize, Serialize};
 
@@ -40,23 +47,30 @@ pub enum LinearKind {
     BendV,
     /// Mixed difference over the four nodes of a cell.
     Twist,
+    /// Third difference along u over four nodes.
+    ThirdU,
+    /// Third difference along v over four nodes.
+    ThirdV,
 }
 
 impl LinearKind {
     /// Every kind, in report order.
-    pub const ALL: [LinearKind; 6] = [
+    pub const ALL: [LinearKind; 8] = [
         LinearKind::SpringU,
         LinearKind::SpringV,
         LinearKind::Diagonal,
         LinearKind::BendU,
         LinearKind::BendV,
         LinearKind::Twist,
+        LinearKind::ThirdU,
+        LinearKind::ThirdV,
     ];
 
     /// The kinds that exist on a chain (a curve's lattice).
-    pub const CHAIN: [LinearKind; 2] = [LinearKind::SpringU, LinearKind::BendU];
+    pub const CHAIN: [LinearKind; 3] = [LinearKind::SpringU, LinearKind::BendU, LinearKind::ThirdU];
 
-    /// `"spring_u"`, `"spring_v"`, `"diagonal"`, `"bend_u"`, `"bend_v"`, `"twist"`.
+    /// `"spring_u"`, `"spring_v"`, `"diagonal"`, `"bend_u"`, `"bend_v"`, `"twist"`,
+    /// `"third_u"`, `"third_v"`.
     pub fn name(self) -> &'static str {
         match self {
             LinearKind::SpringU => "spring_u",
@@ -65,6 +79,8 @@ impl LinearKind {
             LinearKind::BendU => "bend_u",
             LinearKind::BendV => "bend_v",
             LinearKind::Twist => "twist",
+            LinearKind::ThirdU => "third_u",
+            LinearKind::ThirdV => "third_v",
         }
     }
 
@@ -110,7 +126,7 @@ pub struct LinearElement {
     pub coefficients: Vec<f64>,
     /// Weight `w > 0`.
     pub weight: f64,
-    /// Class constant `k ≥ 0`.
+    /// Its constant `k ≥ 0` (the class's, unless a derivation set each element's own).
     pub k: f64,
 }
 
@@ -192,6 +208,30 @@ pub(crate) fn grid_elements(
             2.0 / (h2 * (h1 + h2)),
         ]
     };
+    // The third derivative of the cubic through four nodes at parameters `t`: 6 × the third
+    // divided difference, `6 / Π_{j≠i} (t_i − t_j)` on node i.
+    // The intervals a third difference on the interval `a` stands for: its own, and the end
+    // interval next to it when it is the first or the last.
+    let covered = |h: &[f64], a: usize| -> f64 {
+        let mut w = h[a];
+        if a == 1 {
+            w += h[0];
+        }
+        if a + 2 == h.len() {
+            w += h[a + 1];
+        }
+        w
+    };
+    let third = |t: &[f64]| -> Vec<f64> {
+        (0..4)
+            .map(|i| {
+                6.0 / (0..4)
+                    .filter(|&j| j != i)
+                    .map(|j| t[i] - t[j])
+                    .product::<f64>()
+            })
+            .collect()
+    };
     for &kind in kinds {
         match kind {
             LinearKind::SpringU => {
@@ -260,6 +300,30 @@ pub(crate) fn grid_elements(
                             vec![idx(i, j), idx(i + 1, j), idx(i, j + 1), idx(i + 1, j + 1)],
                             vec![1.0 / a, -1.0 / a, -1.0 / a, 1.0 / a],
                             a,
+                        );
+                    }
+                }
+            }
+            LinearKind::ThirdU => {
+                for i in 1..n_u.saturating_sub(2) {
+                    for j in 0..n_v {
+                        push(
+                            kind,
+                            (i - 1..i + 3).map(|a| idx(a, j)).collect(),
+                            third(&us[i - 1..i + 3]),
+                            covered(&hu, i) * tv[j],
+                        );
+                    }
+                }
+            }
+            LinearKind::ThirdV if n_v > 3 => {
+                for i in 0..n_u {
+                    for j in 1..n_v - 2 {
+                        push(
+                            kind,
+                            (j - 1..j + 3).map(|b| idx(i, b)).collect(),
+                            third(&vs[j - 1..j + 3]),
+                            tu[i] * covered(&hv, j),
                         );
                     }
                 }

@@ -61,7 +61,8 @@ pub struct NodeRecord {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ElementRecord {
-    /// `"spring_u"`, `"spring_v"`, `"diagonal"`, `"bend_u"`, `"bend_v"` or `"twist"`.
+    /// `"spring_u"`, `"spring_v"`, `"diagonal"`, `"bend_u"`, `"bend_v"`, `"twist"`, `"third_u"` or
+    /// `"third_v"`.
     pub kind: LinearKind,
     /// The class sharing its constant, `"kind@interior"` or `"kind@boundary"`.
     pub class: String,

@@ -29,7 +29,7 @@ fn spring_kinds_parse_their_names_and_aliases() {
 #[test]
 fn linear_kinds_and_classes_parse_their_names() {
     let names = [
-        "spring_u", "spring_v", "diagonal", "bend_u", "bend_v", "twist",
+        "spring_u", "spring_v", "diagonal", "bend_u", "bend_v", "twist", "third_u", "third_v",
     ];
     assert_eq!(LinearKind::ALL.map(LinearKind::name), names);
     for kind in LinearKind::ALL {
@@ -39,7 +39,7 @@ fn linear_kinds_and_classes_parse_their_names() {
     assert_eq!(Region::ALL.map(Region::name), ["interior", "boundary"]);
 
     let linear = Class::linear(&LinearKind::ALL);
-    assert_eq!(linear.len(), 12);
+    assert_eq!(linear.len(), 16);
     assert_eq!(
         linear[6],
         Class::Linear(LinearKind::BendU, Region::Interior)

@@ -50,13 +50,15 @@ fn element_counts_and_regions() {
             .sum::<usize>()
     };
     // 5 × 4 nodes: 4·4 springs along u, 5·3 along v, 2·4·3 diagonals, 3·4 bending along u,
-    // 5·2 along v, 4·3 twist cells.
+    // 5·2 along v, 4·3 twist cells, 2·4 third differences along u, 5·1 along v.
     assert_eq!(count(LinearKind::SpringU), 16);
     assert_eq!(count(LinearKind::SpringV), 15);
     assert_eq!(count(LinearKind::Diagonal), 24);
     assert_eq!(count(LinearKind::BendU), 12);
     assert_eq!(count(LinearKind::BendV), 10);
     assert_eq!(count(LinearKind::Twist), 12);
+    assert_eq!(count(LinearKind::ThirdU), 8);
+    assert_eq!(count(LinearKind::ThirdV), 5);
     // Row i = 0 (nodes 0..3) is fixed: exactly the elements touching it are boundary ones.
     for e in &l.elements {
         let touches = e.nodes.iter().any(|&a| a < 4);
@@ -189,6 +191,8 @@ fn stencil_weights_tend_to_the_continuum_energies() {
         // ∫∫ f_u², ∫∫ f_v², ∫∫ (f_u² + f_v²), ∫∫ f_uu², ∫∫ f_vv², ∫∫ f_uv².
         LinearKind::SpringU | LinearKind::SpringV => pi * pi / 4.0,
         LinearKind::Diagonal => pi * pi / 2.0,
+        // ∫∫ f_uuu², ∫∫ f_vvv².
+        LinearKind::ThirdU | LinearKind::ThirdV => pi.powi(6) / 4.0,
         _ => pi.powi(4) / 4.0,
     };
     for kind in LinearKind::ALL {
@@ -318,7 +322,7 @@ fn stencils_on_uneven_spacing_are_exact_for_quadratics() {
     let (tau_u, tau_v) = ([0.05, 0.2, 0.45, 0.3], [0.125, 0.5, 0.375]);
     // Node a = i·3 + j sits at (us[i], vs[j]).
     let ij = |a: usize| (a / 3, a % 3);
-    let mut counts = [0usize; 6];
+    let mut counts = [0usize; 8];
     for e in &l.elements {
         let n = &e.nodes;
         let (i, j) = ij(n[0]);
@@ -339,11 +343,21 @@ fn stencils_on_uneven_spacing_are_exact_for_quadratics() {
                 let (i1, j1) = ij(n[3]);
                 (5.0, (us[i1] - us[i]) * (vs[j1] - vs[j]))
             }
+            // A quadratic has no third derivative. The one stencil along u (nodes 0..3 of four)
+            // covers all three intervals: its weight is the whole extent 1 times τ_v.
+            LinearKind::ThirdU => (0.0, tau_v[j]),
+            LinearKind::ThirdV => unreachable!("three nodes along v have no third difference"),
         };
         counts[LinearKind::ALL.iter().position(|&k| k == e.kind).unwrap()] += 1;
         let s = e.strain(&disp);
         assert_eq!((s[0], s[1]), (0.5 * s[2], -0.25 * s[2]));
-        let scale = expected_strain.abs().max(1.0);
+        // The round-off of `Σ c_i f_i`: the third differences' coefficients reach 10³ here.
+        let roundoff: f64 = n
+            .iter()
+            .zip(&e.coefficients)
+            .map(|(&a, c)| (c * disp[3 * a + 2]).abs())
+            .sum();
+        let scale = expected_strain.abs().max(1.0).max(roundoff);
         assert!(
             (s[2] - expected_strain).abs() <= 1e-13 * scale,
             "{:?} at {n:?}: strain {}, by hand {expected_strain}",
@@ -359,6 +373,54 @@ fn stencils_on_uneven_spacing_are_exact_for_quadratics() {
         let energy = 0.5 * e.k * expected_weight * 1.3125 * expected_strain * expected_strain;
         assert!((e.energy(&disp) - energy).abs() <= 1e-12 * energy.max(1e-12));
     }
-    // spring_u 3·3, spring_v 4·2, diagonal 2·3·2, bend_u 2·3, bend_v 4·1, twist 3·2.
-    assert_eq!(counts, [9, 8, 12, 6, 4, 6]);
+    // spring_u 3·3, spring_v 4·2, diagonal 2·3·2, bend_u 2·3, bend_v 4·1, twist 3·2,
+    // third_u 1·3, third_v none (three nodes along v).
+    assert_eq!(counts, [9, 8, 12, 6, 4, 6, 3, 0]);
+}
+
+/// The third-difference stencils on uneven spacing (nodes at u ∈ {0, 0.1, 0.4, 0.5, 1},
+/// v ∈ {0, 0.3, 0.35, 0.8, 1}) give the third derivatives of a cubic exactly:
+/// `f = u³ − 2v³ + 3u²v + uv² + u²`, `f_uuu = 6`, `f_vvv = −12`, at any spacing.
+#[test]
+fn third_differences_are_exact_for_cubics() {
+    let ku = KnotVector::try_new(vec![0., 0., 0.1, 0.4, 0.5, 1., 1.], 1).unwrap();
+    let kv = KnotVector::try_new(vec![0., 0., 0.3, 0.35, 0.8, 1., 1.], 1).unwrap();
+    let (us, vs) = ([0.0, 0.1, 0.4, 0.5, 1.0], [0.0, 0.3, 0.35, 0.8, 1.0]);
+    let mut pts = Vec::new();
+    for &u in &us {
+        for &v in &vs {
+            pts.push([u, v, 0.0]);
+        }
+    }
+    let plane = NurbsSurface::try_new(ku, kv, pts, vec![1.0; 25]).unwrap();
+    let options = LatticeOptions {
+        grid: ParameterGrid::Knots,
+        constants: Constants::from_pairs(
+            Class::linear(&[LinearKind::ThirdU, LinearKind::ThirdV])
+                .into_iter()
+                .map(|c| (c, 1.0)),
+        ),
+        ..LatticeOptions::default()
+    };
+    let l = SpringLattice::from_surface(&plane, &options, &[]).unwrap();
+    let f = |u: f64, v: f64| u.powi(3) - 2.0 * v.powi(3) + 3.0 * u * u * v + u * v * v + u * u;
+    let params = l.params.clone().unwrap();
+    let mut disp = vec![0.0; 3 * l.n_nodes()];
+    for (a, &(u, v)) in params.iter().enumerate() {
+        disp[3 * a + 2] = f(u, v);
+    }
+    // 5 × 5 nodes: 2 · 5 stencils along each direction.
+    assert_eq!(l.elements.len(), 20);
+    for e in &l.elements {
+        let expected = if e.kind == LinearKind::ThirdU {
+            6.0
+        } else {
+            -12.0
+        };
+        let s = e.strain(&disp)[2];
+        assert!((s - expected).abs() <= 1e-11, "{e:?}: {s}");
+        // Constants and linear functions are annihilated too (the strain of f is exact).
+        let sum: f64 = e.coefficients.iter().sum();
+        assert!(sum.abs() <= 1e-12 * e.coefficients[0].abs(), "{e:?}");
+    }
 }

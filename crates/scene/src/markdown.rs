@@ -3,7 +3,10 @@
 use std::fmt::Write as _;
 
 use nurbspring_derive::paper::PaperReport;
-use nurbspring_derive::{Derivation, FitDetail, FitReport, FitResult, ParameterSet, Validation};
+use nurbspring_derive::{
+    Derivation, FitDetail, FitReport, FitResult, LINEAR_RANGE, ParameterSet, REGIME_FREQUENCY,
+    Regime, Validation,
+};
 use nurbspring_msm::{Class, SpringKind};
 
 fn fmt_k(f: &FitResult, class: Class) -> String {
@@ -47,7 +50,8 @@ pub fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> 
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "# nurbspring derivation report\n\nScene: `{scene_label}`; derivation: `{}`\n",
+        "# nurbspring derivation report\n\n{}\n\nScene: `{scene_label}`; derivation: `{}`\n",
+        verdict(&d.regime),
         d.method.name()
     );
     if !d.warnings.is_empty() {
@@ -62,15 +66,16 @@ pub fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> 
         FitDetail::Modal(f) => {
             let _ = writeln!(
                 s,
-                "## Modal fit\n\n{} classes fitted to the {} lowest D-NURBS modes (ω = {}); relative residual of the eigen-equations {:.4e}; lowest frequency {:.6} rad/s before the calibration, {:.6} after (mass scale {:.6}).\n",
+                "## Modal fit\n\n{} element groups in {} classes fitted to {} D-NURBS modes (those with at most {} × {} half-waves, ω up to {:.4}); relative residual of the eigen-equations {:.4e}, of the Rayleigh quotients {:.4e}; the worst fitted mode {:.3e} off after the calibration; lowest frequency {:.6} rad/s before the calibration, {:.6} after (mass scale {:.6}). Each element's constant is in msm.json; the table gives each class's mean.\n",
+                f.groups.len(),
                 f.classes.len(),
                 f.modes,
-                f.mode_frequencies
-                    .iter()
-                    .map(|w| format!("{w:.4}"))
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                f.half_waves[0],
+                f.half_waves[1],
+                f.mode_frequencies.last().copied().unwrap_or(0.0),
                 f.relative_residual,
+                f.frequency_residual,
+                f.worst_fitted_mode,
                 f.omega1_fitted,
                 f.omega1_dnurbs,
                 f.mass_scale
@@ -132,14 +137,15 @@ pub fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> 
     if !d.frequencies.is_empty() {
         let _ = writeln!(
             s,
-            "\n## Frequencies\n\n| mode | D-NURBS ω | MSM ω | difference | MAC |\n|---|---|---|---|---|"
+            "\n## Frequencies\n\nEach D-NURBS mode beside the MSM mode matched to it (by MAC at the free nodes, a repeated frequency as a subspace; by rank where the MSM's modes are not isotropic).\n\n| mode | D-NURBS ω | MSM mode | MSM ω | difference | MAC |\n|---|---|---|---|---|---|"
         );
         for r in &d.frequencies {
             let _ = writeln!(
                 s,
-                "| {} | {:.6} | {:.6} | {:+.3}% | {} |",
+                "| {} | {:.6} | {} | {:.6} | {:+.3}% | {} |",
                 r.mode,
                 r.dnurbs,
+                r.msm_mode,
                 r.msm,
                 100.0 * r.relative_difference,
                 r.mac
@@ -155,6 +161,44 @@ pub fn report_markdown(scene_label: &str, d: &Derivation, paper_table: &str) -> 
         );
     }
     s
+}
+
+/// The one-line verdict: the frequencies and displacements the model may be used for, and
+/// where the scene's own motion lies (docs/math.md §8.7).
+fn verdict(r: &Regime) -> String {
+    let frequencies = if r.modes == 0 {
+        format!(
+            "no frequency range (not even the lowest D-NURBS mode has an MSM mode within {:.0}%)",
+            100.0 * REGIME_FREQUENCY
+        )
+    } else {
+        format!(
+            "frequencies up to ω = {:.4} rad/s (the {} lowest D-NURBS modes, each matched within {:.0}%)",
+            r.frequency,
+            r.modes,
+            100.0 * REGIME_FREQUENCY
+        )
+    };
+    let share = |x: f64| 100.0 * x / r.size;
+    let motion = if r.motion > r.amplitude {
+        format!(
+            "the scene's own motion reaches {:.4} ({:.0}% of the size): **outside the linear range**, so the figures below compare two linear models of a motion neither describes",
+            r.motion,
+            share(r.motion)
+        )
+    } else {
+        format!(
+            "the scene's own motion reaches {:.4} ({:.1}% of the size), inside it",
+            r.motion,
+            share(r.motion)
+        )
+    };
+    format!(
+        "**Verdict:** use this model for {frequencies} and displacements up to {:.4} ({:.0}% of the surface's size {:.4}); {motion}.",
+        r.amplitude,
+        100.0 * LINEAR_RANGE,
+        r.size
+    )
 }
 
 fn constants_table(s: &mut String, constants: &nurbspring_msm::Constants) {

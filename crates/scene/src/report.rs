@@ -7,7 +7,7 @@ use std::path::Path;
 use nurbspring_derive::paper::PaperReport;
 use nurbspring_derive::{
     Derivation, FitDetail, FrequencyRow, InitialConditions, MassReport, Method, NodeReduction,
-    ParameterSet, Spectrum, TimeSettings, Trajectory, Validation,
+    ParameterSet, Regime, Spectrum, TimeSettings, Trajectory, Validation,
 };
 use nurbspring_dnurbs::{DnurbsOptions, Loads, MaterialModel};
 use nurbspring_io::output::{write_csv, write_json};
@@ -75,6 +75,8 @@ pub struct Report<'a> {
     pub second_excitation: &'a Validation,
     /// The lowest frequencies of both models.
     pub frequencies: &'a [FrequencyRow],
+    /// The regime the model may be used in (report.md's verdict).
+    pub regime: &'a Regime,
     /// Frequencies of both models.
     pub spectrum: &'a Spectrum,
     /// Probe points.
@@ -116,6 +118,7 @@ impl<'a> Report<'a> {
             validation: &d.derived.validation,
             second_excitation: &d.second_excitation,
             frequencies: &d.frequencies,
+            regime: &d.regime,
             spectrum: &d.spectrum,
             probes: d
                 .probes

@@ -1245,7 +1245,7 @@ fn check_msm(
                 p.push(
                     "msm.elements",
                     format!("\"{}\"", k.name()),
-                    "a curve's lattice has only spring_u and bend_u elements",
+                    "a curve's lattice has only spring_u, bend_u and third_u elements",
                 );
             }
         }
