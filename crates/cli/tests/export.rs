@@ -666,7 +666,11 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
         .success();
     // (model, integrator: None runs the one the archive records, with no flag to simulate).
     let small = small_msm(dir.path(), true, true);
-    let models: [(PathBuf, Option<&str>); 7] = [
+    // Springs with axial damping and hinges with non-zero rest angles.
+    let cloth = cloth_msm(dir.path(), true);
+    let models: [(PathBuf, Option<&str>); 9] = [
+        (cloth.clone(), Some("symplectic-euler")),
+        (cloth, Some("backward-euler")),
         (small.clone(), Some("symplectic-euler")),
         (small.clone(), Some("verlet")),
         (small.clone(), Some("rk4")),

@@ -61,6 +61,26 @@ pub(crate) struct Topology {
     pub damping_fixed: Vec<f64>,
     /// The hinges touching an active node.
     pub hinges: HingeTopology,
+    /// The per-hinge force buffer of [`Topology::internal_forces`], kept between calls so
+    /// that a step allocates nothing.
+    hinge_buffer: HingeBuffer,
+}
+
+/// A reusable buffer of four node forces per hinge. Cloning gives an empty one (it is only
+/// scratch space); a call that finds it in use by another thread allocates its own.
+#[derive(Default)]
+struct HingeBuffer(std::sync::Mutex<Vec<[[f64; 3]; 4]>>);
+
+impl Clone for HingeBuffer {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl std::fmt::Debug for HingeBuffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("HingeBuffer")
+    }
 }
 
 /// The hinges of a [`Topology`] that touch at least one active node.
@@ -99,13 +119,15 @@ impl HingeTopology {
     /// The positions of hinge `h`'s nodes, the active ones from `x`.
     #[inline(always)]
     pub fn positions(&self, h: usize, x: &[[f64; 3]]) -> [[f64; 3]; 4] {
-        self.nodes[h].map(|i| {
+        let at = |i: u32| {
             if i & FIXED != 0 {
                 self.fixed_x[(i & !FIXED) as usize]
             } else {
                 x[i as usize]
             }
-        })
+        };
+        let [a, b, c, d] = self.nodes[h];
+        [at(a), at(b), at(c), at(d)]
     }
 
     /// The internal forces `k w (θ − θ0) ∂θ/∂x_i` of every hinge into `buffer` (four per
@@ -269,6 +291,7 @@ impl Topology {
             damping,
             damping_fixed,
             hinges,
+            hinge_buffer: HingeBuffer::default(),
         }
     }
 
@@ -288,21 +311,29 @@ impl Topology {
 
     /// Internal force `f_int = −f_elastic` (paper eq. (5) with the sign of a stiffness) on every
     /// active node: `out[a] = Σ_b k w (1 − l/|d|) d`, `d = x_a − x_b`, with `x` the active
-    /// positions, plus `Σ_hinges k w (θ − θ0) ∂θ/∂x_a` (docs/math.md §5.2). Without hinges
-    /// allocation-free; parallel over chunks of nodes (and hinges) for large lattices.
+    /// positions, plus `Σ_hinges k w (θ − θ0) ∂θ/∂x_a` (docs/math.md §5.2). Allocation-free
+    /// after the first call (the hinges' buffer is kept); parallel over chunks of nodes (and hinges) for large lattices.
     pub fn internal_forces(&self, x: &[[f64; 3]], out: &mut [[f64; 3]]) {
         let n = self.n_active();
         assert_eq!(x.len(), n, "positions of {n} active nodes expected");
         assert_eq!(out.len(), n, "forces of {n} active nodes expected");
-        let buffer = (self.hinges.len() > 0).then(|| {
-            let mut b = vec![[[0.0; 3]; 4]; self.hinges.len()];
-            self.hinges.hinge_forces(x, &mut b);
-            b
-        });
+        let n_hinges = self.hinges.len();
+        // The kept buffer, or (when another thread holds it) one of this call's own.
+        let mut kept = self.hinge_buffer.0.try_lock().ok();
+        let mut own = Vec::new();
+        let buffer: &mut Vec<[[f64; 3]; 4]> = match kept.as_deref_mut() {
+            Some(b) => b,
+            None => &mut own,
+        };
+        buffer.resize(n_hinges, [[0.0; 3]; 4]);
+        if n_hinges > 0 {
+            self.hinges.hinge_forces(x, buffer);
+        }
+        let buffer: &[[[f64; 3]; 4]] = buffer;
         let range = |first: usize, chunk: &mut [[f64; 3]]| {
             self.forces_range(first, x, chunk);
-            if let Some(b) = &buffer {
-                self.hinges.gather(first, b, chunk);
+            if n_hinges > 0 {
+                self.hinges.gather(first, buffer, chunk);
             }
         };
         if self.n_incidences() + 4 * self.hinges.len() < SERIAL_INCIDENCES {
