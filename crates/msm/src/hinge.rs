@@ -205,9 +205,11 @@ pub(crate) fn angle(x: &[[f64; 3]; 4]) -> f64 {
     atan2(dot(e, cross(n1, n2)), l * dot(n1, n2))
 }
 
-/// `θ` and `∇θ` at `x` (module docs).
+/// `θ` and the terms of `∇θ` at `x` (module docs): `(θ, ∂θ/∂x2, ∂θ/∂x3, t2, t3)`, from which
+/// `∂θ/∂x1 = −t2 ∂θ/∂x2 − t3 ∂θ/∂x3` and `∂θ/∂x0 = −(1 − t2) ∂θ/∂x2 − (1 − t3) ∂θ/∂x3`
+/// ([`edge_gradients`]).
 #[inline(always)]
-pub(crate) fn angle_gradient(x: &[[f64; 3]; 4]) -> HingeAngle {
+pub(crate) fn angle_terms(x: &[[f64; 3]; 4]) -> (f64, [f64; 3], [f64; 3], f64, f64) {
     let e = sub(x[1], x[0]);
     let a = sub(x[2], x[0]);
     let b = sub(x[3], x[0]);
@@ -220,14 +222,30 @@ pub(crate) fn angle_gradient(x: &[[f64; 3]; 4]) -> HingeAngle {
     let g3 = scale(-l / dot(n2, n2), n2);
     let t2 = dot(a, e) / l2;
     let t3 = dot(b, e) / l2;
-    let mut grad = [[0.0; 3]; 4];
+    (theta, g2, g3, t2, t3)
+}
+
+/// The gradients at the edge's nodes from those at the wings (module docs): `[∂/∂x0, ∂/∂x1]`
+/// `= [−(1 − t2) g2 − (1 − t3) g3, −t2 g2 − t3 g3]`.
+#[inline(always)]
+pub(crate) fn edge_gradients(g2: [f64; 3], g3: [f64; 3], t2: f64, t3: f64) -> [[f64; 3]; 2] {
+    let mut out = [[0.0; 3]; 2];
     for c in 0..3 {
-        grad[0][c] = -(1.0 - t2) * g2[c] - (1.0 - t3) * g3[c];
-        grad[1][c] = -t2 * g2[c] - t3 * g3[c];
-        grad[2][c] = g2[c];
-        grad[3][c] = g3[c];
+        out[0][c] = -(1.0 - t2) * g2[c] - (1.0 - t3) * g3[c];
+        out[1][c] = -t2 * g2[c] - t3 * g3[c];
     }
-    HingeAngle { theta, grad }
+    out
+}
+
+/// `θ` and `∇θ` at `x` (module docs).
+#[inline(always)]
+pub(crate) fn angle_gradient(x: &[[f64; 3]; 4]) -> HingeAngle {
+    let (theta, g2, g3, t2, t3) = angle_terms(x);
+    let [g0, g1] = edge_gradients(g2, g3, t2, t3);
+    HingeAngle {
+        theta,
+        grad: [g0, g1, g2, g3],
+    }
 }
 
 type Block = [[f64; 3]; 3];

@@ -12,14 +12,14 @@
 //! between two fixed nodes never move: their energy is a constant, computed once.
 //!
 //! Hinges (docs/math.md §5.2) couple four nodes: each is evaluated once into a per-hinge
-//! buffer of its four node forces (in parallel over hinges), then every active node adds the
-//! entries of its hinges in incidence order (in parallel over nodes), so the result does not
-//! depend on the number of threads. A hinge node that is fixed is read from its stored
+//! buffer of the terms of its four node forces (`HingeTerms`, in parallel over hinges), then
+//! every active node adds the entries of its hinges in incidence order (in parallel over
+//! nodes), so the result does not depend on the number of threads. A hinge node that is fixed is read from its stored
 //! position.
 
 use rayon::prelude::*;
 
-use crate::hinge::{angle, angle_difference, angle_gradient};
+use crate::hinge::{angle, angle_difference, angle_terms, edge_gradients};
 use crate::spring::{energy, internal_coefficient, sub};
 use crate::{Class, SpringLattice};
 
@@ -66,10 +66,31 @@ pub(crate) struct Topology {
     hinge_buffer: HingeBuffer,
 }
 
-/// A reusable buffer of four node forces per hinge. Cloning gives an empty one (it is only
+/// The force of one hinge as [`HingeTopology::gather`] reads it: `s ∂θ/∂x2`, `s ∂θ/∂x3`
+/// (`s = k w (θ − θ0)`), `t2`, `t3`, one cache line, from which the forces on the edge's nodes
+/// follow ([`edge_gradients`]); two thirds of the bytes of the four forces.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+pub(crate) struct HingeTerms([f64; 8]);
+
+impl HingeTerms {
+    /// The force on the hinge's node `slot` (0, 1: the edge; 2, 3: the wings).
+    #[inline(always)]
+    fn force(&self, slot: u8) -> [f64; 3] {
+        let t = &self.0;
+        let (g2, g3) = ([t[0], t[1], t[2]], [t[3], t[4], t[5]]);
+        match slot {
+            0 | 1 => edge_gradients(g2, g3, t[6], t[7])[slot as usize],
+            2 => g2,
+            _ => g3,
+        }
+    }
+}
+
+/// A reusable buffer of the terms of every hinge's forces. Cloning gives an empty one (it is only
 /// scratch space); a call that finds it in use by another thread allocates its own.
 #[derive(Default)]
-struct HingeBuffer(std::sync::Mutex<Vec<[[f64; 3]; 4]>>);
+struct HingeBuffer(std::sync::Mutex<Vec<HingeTerms>>);
 
 impl Clone for HingeBuffer {
     fn clone(&self) -> Self {
@@ -130,15 +151,24 @@ impl HingeTopology {
         [at(a), at(b), at(c), at(d)]
     }
 
-    /// The internal forces `k w (θ − θ0) ∂θ/∂x_i` of every hinge into `buffer` (four per
-    /// hinge).
-    fn hinge_forces(&self, x: &[[f64; 3]], buffer: &mut [[[f64; 3]; 4]]) {
-        let eval = |first: usize, out: &mut [[[f64; 3]; 4]]| {
+    /// The terms of the internal forces `k w (θ − θ0) ∂θ/∂x_i` of every hinge into `buffer`
+    /// ([`HingeTerms`]).
+    fn hinge_forces(&self, x: &[[f64; 3]], buffer: &mut [HingeTerms]) {
+        let eval = |first: usize, out: &mut [HingeTerms]| {
             for (i, f) in out.iter_mut().enumerate() {
                 let h = first + i;
-                let g = angle_gradient(&self.positions(h, x));
-                let s = self.kw[h] * angle_difference(g.theta, self.rest[h]);
-                *f = g.grad.map(|gi| [s * gi[0], s * gi[1], s * gi[2]]);
+                let (theta, g2, g3, t2, t3) = angle_terms(&self.positions(h, x));
+                let s = self.kw[h] * angle_difference(theta, self.rest[h]);
+                *f = HingeTerms([
+                    s * g2[0],
+                    s * g2[1],
+                    s * g2[2],
+                    s * g3[0],
+                    s * g3[1],
+                    s * g3[2],
+                    t2,
+                    t3,
+                ]);
             }
         };
         if self.len() < SERIAL_HINGES {
@@ -152,11 +182,11 @@ impl HingeTopology {
     }
 
     /// Adds the hinge forces of `buffer` to the active nodes `first .. first + out.len()`.
-    fn gather(&self, first: usize, buffer: &[[[f64; 3]; 4]], out: &mut [[f64; 3]]) {
+    fn gather(&self, first: usize, buffer: &[HingeTerms], out: &mut [[f64; 3]]) {
         for (i, f) in out.iter_mut().enumerate() {
             let a = first + i;
             for &(h, slot) in &self.incidence[self.off[a]..self.off[a + 1]] {
-                let g = buffer[h as usize][slot as usize];
+                let g = buffer[h as usize].force(slot);
                 f[0] += g[0];
                 f[1] += g[1];
                 f[2] += g[2];
@@ -321,15 +351,15 @@ impl Topology {
         // The kept buffer, or (when another thread holds it) one of this call's own.
         let mut kept = self.hinge_buffer.0.try_lock().ok();
         let mut own = Vec::new();
-        let buffer: &mut Vec<[[f64; 3]; 4]> = match kept.as_deref_mut() {
+        let buffer: &mut Vec<HingeTerms> = match kept.as_deref_mut() {
             Some(b) => b,
             None => &mut own,
         };
-        buffer.resize(n_hinges, [[0.0; 3]; 4]);
+        buffer.resize(n_hinges, HingeTerms::default());
         if n_hinges > 0 {
             self.hinges.hinge_forces(x, buffer);
         }
-        let buffer: &[[[f64; 3]; 4]] = buffer;
+        let buffer: &[HingeTerms] = buffer;
         let range = |first: usize, chunk: &mut [[f64; 3]]| {
             self.forces_range(first, x, chunk);
             if n_hinges > 0 {
