@@ -19,7 +19,7 @@
 
 use rayon::prelude::*;
 
-use crate::hinge::{angle, angle_difference, angle_terms, edge_gradients};
+use crate::hinge::{angle, angle_difference, angle_terms};
 use crate::spring::{energy, internal_coefficient, sub};
 use crate::{Class, SpringLattice};
 
@@ -68,22 +68,26 @@ pub(crate) struct Topology {
 
 /// The force of one hinge as [`HingeTopology::gather`] reads it: `s ∂θ/∂x2`, `s ∂θ/∂x3`
 /// (`s = k w (θ − θ0)`), `t2`, `t3`, one cache line, from which the forces on the edge's nodes
-/// follow ([`edge_gradients`]); two thirds of the bytes of the four forces.
+/// follow (`hinge::edge_gradients`); two thirds of the bytes of the four forces.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 pub(crate) struct HingeTerms([f64; 8]);
 
 impl HingeTerms {
-    /// The force on the hinge's node `slot` (0, 1: the edge; 2, 3: the wings).
+    /// The force `c2 s ∂θ/∂x2 + c3 s ∂θ/∂x3` on the hinge's node `slot` (0, 1: the edge, with
+    /// the coefficients of `hinge::edge_gradients`; 2, 3: the wings, `(1, 0)` and `(0, 1)`), without
+    /// a branch on the slot (the slots of a node's hinges follow no pattern a predictor learns).
     #[inline(always)]
     fn force(&self, slot: u8) -> [f64; 3] {
         let t = &self.0;
-        let (g2, g3) = ([t[0], t[1], t[2]], [t[3], t[4], t[5]]);
-        match slot {
-            0 | 1 => edge_gradients(g2, g3, t[6], t[7])[slot as usize],
-            2 => g2,
-            _ => g3,
-        }
+        let (t2, t3) = (t[6], t[7]);
+        let c2 = [t2 - 1.0, -t2, 1.0, 0.0][slot as usize & 3];
+        let c3 = [t3 - 1.0, -t3, 0.0, 1.0][slot as usize & 3];
+        [
+            c2 * t[0] + c3 * t[3],
+            c2 * t[1] + c3 * t[4],
+            c2 * t[2] + c3 * t[5],
+        ]
     }
 }
 
