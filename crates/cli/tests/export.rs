@@ -854,7 +854,7 @@ print("ok")
 }
 
 /// The SOFA scene: run its `createScene` against a stand-in for SofaPython3's node API and check
-/// the components and their data; a model of linear elements only is refused, a mixed one warns.
+/// the components and their data; a model with linear elements is refused.
 #[test]
 fn sofa_scene_builds_the_graph() {
     let dir = tempfile::tempdir().unwrap();
@@ -881,6 +881,7 @@ fn sofa_scene_builds_the_graph() {
         assert!(text.contains(needle), "{needle}");
     }
 
+    // Springs and linear elements: leaving the elements out would change the model.
     let mixed = small_msm(dir.path(), true, true);
     let a = bin()
         .arg("export")
@@ -888,8 +889,13 @@ fn sofa_scene_builds_the_graph() {
         .args(["--format", "sofa", "--out"])
         .arg(dir.path().join("mixed.py"))
         .assert()
-        .success();
-    assert!(stderr_of(&a).contains("warning: the model's 3 linear elements"));
+        .code(2);
+    let err = stderr_of(&a);
+    assert!(
+        err.contains("3 linear elements") && err.contains("bend_u@boundary"),
+        "{err}"
+    );
+    assert!(!dir.path().join("mixed.py").exists());
     let linear = small_msm(dir.path(), true, false);
     let a = bin()
         .arg("export")

@@ -414,28 +414,6 @@ pub fn sofa_limitations(setup: &MsmSetup) -> Vec<String> {
             lattice.hinges.len()
         ));
     }
-    if !lattice.elements.is_empty() {
-        out.push(format!(
-            "the model's {} linear elements (energy 1/2 k w |sum_i c_i u_i|^2 on the displacements \
-             u = x - x(0)) are not in the SOFA scene: SOFA's spring components have a scalar rest \
-             length, not a rest vector, and the bend and twist stencils couple 3 or 4 nodes; \
-             use --format npz for the whole model",
-            lattice.elements.len()
-        ));
-    }
-    let free_damping: Vec<f64> = setup
-        .model
-        .free_nodes()
-        .iter()
-        .map(|&a| lattice.damping[a])
-        .collect();
-    if free_damping.windows(2).any(|w| w[0] != w[1]) {
-        out.push(
-            "the node damping varies from node to node; SOFA's UniformVelocityDampingForceField \
-             holds one coefficient, so the scene uses their mean"
-                .to_string(),
-        );
-    }
     if !matches!(
         setup.run.integrator,
         IntegratorKind::SymplecticEuler | IntegratorKind::Rk4 | IntegratorKind::BackwardEuler
@@ -475,16 +453,38 @@ fn py_floats(v: &[f64]) -> String {
 }
 
 /// The SOFA scene (SofaPython3 `createScene`) of an MSM, or why SOFA cannot hold it: a model
-/// whose only elastic forces are linear elements has nothing SOFA's springs can express.
+/// with linear elements (SOFA's springs cannot express them), with node damping that varies
+/// from node to node, or with hinges SOFA's bending cannot hold ([`sofa_bending`]).
 pub fn sofa_scene(setup: &MsmSetup, source: &str, file_name: &str) -> Result<String, String> {
     let lattice = setup.model.lattice();
-    if lattice.springs.is_empty() && !lattice.elements.is_empty() {
+    if !lattice.elements.is_empty() {
+        let mut classes: Vec<String> = lattice.elements.iter().map(|e| e.class().name()).collect();
+        classes.sort();
+        classes.dedup();
         return Err(format!(
-            "the model has no springs, only {} linear elements (energy 1/2 k w |sum_i c_i u_i|^2 on \
+            "the model has {} linear elements (classes {}; energy 1/2 k w |sum_i c_i u_i|^2 on \
              the displacements), which SOFA's spring components cannot express (a scalar rest \
-             length, two nodes); export it with --format npz, or derive a spring model with \
-             `derive --derivation paper`",
-            lattice.elements.len()
+             length, two nodes), and leaving them out would change the model; export it with \
+             --format npz{}",
+            lattice.elements.len(),
+            classes.join(", "),
+            if lattice.springs.is_empty() {
+                ", or derive a spring model with `derive --derivation paper`"
+            } else {
+                ""
+            }
+        ));
+    }
+    let free = setup.model.free_nodes();
+    if let Some(w) = free
+        .windows(2)
+        .find(|w| lattice.damping[w[0]] != lattice.damping[w[1]])
+    {
+        return Err(format!(
+            "its node damping varies from node to node (gamma = {} at node {}, {} at node {}), \
+             and SOFA's UniformVelocityDampingForceField holds one coefficient; export it with \
+             --format newton or npz",
+            lattice.damping[w[0]], w[0], lattice.damping[w[1]], w[1]
         ));
     }
     let bending = sofa_bending(lattice)?;
@@ -492,12 +492,8 @@ pub fn sofa_scene(setup: &MsmSetup, source: &str, file_name: &str) -> Result<Str
     let fixed: Vec<usize> = (0..lattice.n_nodes())
         .filter(|&a| lattice.fixed[a])
         .collect();
-    let free = setup.model.free_nodes();
-    let damping = if free.is_empty() {
-        0.0
-    } else {
-        free.iter().map(|&a| lattice.damping[a]).sum::<f64>() / free.len() as f64
-    };
+    // One coefficient: the free nodes' (checked equal above).
+    let damping = free.first().map_or(0.0, |&a| lattice.damping[a]);
     let limitations = sofa_limitations(setup);
     let mut s = String::new();
     let _ = writeln!(
