@@ -11,15 +11,16 @@
 //! negatives, so the total force is zero up to the rounding of the per-node sums. Springs
 //! between two fixed nodes never move: their energy is a constant, computed once.
 //!
-//! Hinges (docs/math.md §5.2) couple four nodes: each is evaluated once into a per-hinge
-//! buffer of the terms of its four node forces (`HingeTerms`, in parallel over hinges), then
-//! every active node adds the entries of its hinges in incidence order (in parallel over
-//! nodes), so the result does not depend on the number of threads. A hinge node that is fixed is read from its stored
+//! Hinges (docs/math.md §5.2) couple four nodes: each chunk of nodes evaluates the hinges with
+//! a node in the chunk (a hinge across two chunks twice, about one in eight on a 256-wide
+//! grid) and adds their forces to its own nodes only, in the chunk's hinge order; no buffer,
+//! no locks, and the chunks are the same serially and in parallel, so the result does not
+//! depend on the number of threads. A hinge node that is fixed is read from its stored
 //! position.
 
 use rayon::prelude::*;
 
-use crate::hinge::{angle, angle_difference, angle_terms};
+use crate::hinge::{angle, angle_difference, angle_terms, edge_gradients};
 use crate::spring::{energy, internal_coefficient, sub};
 use crate::{Class, SpringLattice};
 
@@ -61,51 +62,6 @@ pub(crate) struct Topology {
     pub damping_fixed: Vec<f64>,
     /// The hinges touching an active node.
     pub hinges: HingeTopology,
-    /// The per-hinge force buffer of [`Topology::internal_forces`], kept between calls so
-    /// that a step allocates nothing.
-    hinge_buffer: HingeBuffer,
-}
-
-/// The force of one hinge as [`HingeTopology::gather`] reads it: `s ∂θ/∂x2`, `s ∂θ/∂x3`
-/// (`s = k w (θ − θ0)`), `t2`, `t3`, one cache line, from which the forces on the edge's nodes
-/// follow (`hinge::edge_gradients`); two thirds of the bytes of the four forces.
-#[derive(Clone, Copy, Debug, Default)]
-#[repr(C, align(64))]
-pub(crate) struct HingeTerms([f64; 8]);
-
-impl HingeTerms {
-    /// The force `c2 s ∂θ/∂x2 + c3 s ∂θ/∂x3` on the hinge's node `slot` (0, 1: the edge, with
-    /// the coefficients of `hinge::edge_gradients`; 2, 3: the wings, `(1, 0)` and `(0, 1)`), without
-    /// a branch on the slot (the slots of a node's hinges follow no pattern a predictor learns).
-    #[inline(always)]
-    fn force(&self, slot: u8) -> [f64; 3] {
-        let t = &self.0;
-        let (t2, t3) = (t[6], t[7]);
-        let c2 = [t2 - 1.0, -t2, 1.0, 0.0][slot as usize & 3];
-        let c3 = [t3 - 1.0, -t3, 0.0, 1.0][slot as usize & 3];
-        [
-            c2 * t[0] + c3 * t[3],
-            c2 * t[1] + c3 * t[4],
-            c2 * t[2] + c3 * t[5],
-        ]
-    }
-}
-
-/// A reusable buffer of the terms of every hinge's forces. Cloning gives an empty one (it is only
-/// scratch space); a call that finds it in use by another thread allocates its own.
-#[derive(Default)]
-struct HingeBuffer(std::sync::Mutex<Vec<HingeTerms>>);
-
-impl Clone for HingeBuffer {
-    fn clone(&self) -> Self {
-        Self::default()
-    }
-}
-
-impl std::fmt::Debug for HingeBuffer {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("HingeBuffer")
-    }
 }
 
 /// The hinges of a [`Topology`] that touch at least one active node.
@@ -125,6 +81,10 @@ pub(crate) struct HingeTopology {
     /// CSR by active node of its `(hinge, slot)` incidences (offsets: `n_active + 1`).
     pub off: Vec<usize>,
     pub incidence: Vec<(u32, u8)>,
+    /// CSR by chunk of [`CHUNK_NODES`] active nodes of the hinges with a node in the chunk,
+    /// in increasing order (a hinge across two chunks is listed in both).
+    pub chunk_off: Vec<usize>,
+    pub chunk_hinges: Vec<u32>,
 }
 
 /// Marks a fixed node in [`HingeTopology::nodes`].
@@ -155,45 +115,21 @@ impl HingeTopology {
         [at(a), at(b), at(c), at(d)]
     }
 
-    /// The terms of the internal forces `k w (θ − θ0) ∂θ/∂x_i` of every hinge into `buffer`
-    /// ([`HingeTerms`]).
-    fn hinge_forces(&self, x: &[[f64; 3]], buffer: &mut [HingeTerms]) {
-        let eval = |first: usize, out: &mut [HingeTerms]| {
-            for (i, f) in out.iter_mut().enumerate() {
-                let h = first + i;
-                let (theta, g2, g3, t2, t3) = angle_terms(&self.positions(h, x));
-                let s = self.kw[h] * angle_difference(theta, self.rest[h]);
-                *f = HingeTerms([
-                    s * g2[0],
-                    s * g2[1],
-                    s * g2[2],
-                    s * g3[0],
-                    s * g3[1],
-                    s * g3[2],
-                    t2,
-                    t3,
-                ]);
-            }
-        };
-        if self.len() < SERIAL_HINGES {
-            eval(0, buffer);
-        } else {
-            buffer
-                .par_chunks_mut(CHUNK_HINGES)
-                .enumerate()
-                .for_each(|(c, out)| eval(c * CHUNK_HINGES, out));
-        }
-    }
-
-    /// Adds the hinge forces of `buffer` to the active nodes `first .. first + out.len()`.
-    fn gather(&self, first: usize, buffer: &[HingeTerms], out: &mut [[f64; 3]]) {
-        for (i, f) in out.iter_mut().enumerate() {
-            let a = first + i;
-            for &(h, slot) in &self.incidence[self.off[a]..self.off[a + 1]] {
-                let g = buffer[h as usize].force(slot);
-                f[0] += g[0];
-                f[1] += g[1];
-                f[2] += g[2];
+    /// Adds the internal forces `k w (θ − θ0) ∂θ/∂x_i` of the hinges `list` to those of their
+    /// nodes that are active nodes `first .. first + out.len()`, in the list's order.
+    fn add_forces(&self, list: &[u32], first: usize, x: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        for &h in list {
+            let h = h as usize;
+            let (theta, g2, g3, t2, t3) = angle_terms(&self.positions(h, x));
+            let s = self.kw[h] * angle_difference(theta, self.rest[h]);
+            let [g0, g1] = edge_gradients(g2, g3, t2, t3);
+            for (&i, g) in self.nodes[h].iter().zip([g0, g1, g2, g3]) {
+                // A fixed node's index has the FIXED bit and is never in range.
+                if let Some(f) = (i as usize).checked_sub(first).and_then(|r| out.get_mut(r)) {
+                    f[0] += s * g[0];
+                    f[1] += s * g[1];
+                    f[2] += s * g[2];
+                }
             }
         }
     }
@@ -325,7 +261,6 @@ impl Topology {
             damping,
             damping_fixed,
             hinges,
-            hinge_buffer: HingeBuffer::default(),
         }
     }
 
@@ -345,33 +280,26 @@ impl Topology {
 
     /// Internal force `f_int = −f_elastic` (paper eq. (5) with the sign of a stiffness) on every
     /// active node: `out[a] = Σ_b k w (1 − l/|d|) d`, `d = x_a − x_b`, with `x` the active
-    /// positions, plus `Σ_hinges k w (θ − θ0) ∂θ/∂x_a` (docs/math.md §5.2). Allocation-free
-    /// after the first call (the hinges' buffer is kept); parallel over chunks of nodes (and hinges) for large lattices.
+    /// positions, plus `Σ_hinges k w (θ − θ0) ∂θ/∂x_a` (docs/math.md §5.2). Allocation-free;
+    /// parallel over chunks of nodes (and hinges) for large lattices.
     pub fn internal_forces(&self, x: &[[f64; 3]], out: &mut [[f64; 3]]) {
         let n = self.n_active();
         assert_eq!(x.len(), n, "positions of {n} active nodes expected");
         assert_eq!(out.len(), n, "forces of {n} active nodes expected");
-        let n_hinges = self.hinges.len();
-        // The kept buffer, or (when another thread holds it) one of this call's own.
-        let mut kept = self.hinge_buffer.0.try_lock().ok();
-        let mut own = Vec::new();
-        let buffer: &mut Vec<HingeTerms> = match kept.as_deref_mut() {
-            Some(b) => b,
-            None => &mut own,
-        };
-        buffer.resize(n_hinges, HingeTerms::default());
-        if n_hinges > 0 {
-            self.hinges.hinge_forces(x, buffer);
-        }
-        let buffer: &[HingeTerms] = buffer;
+        let hinges = &self.hinges;
         let range = |first: usize, chunk: &mut [[f64; 3]]| {
             self.forces_range(first, x, chunk);
-            if n_hinges > 0 {
-                self.hinges.gather(first, buffer, chunk);
+            let c = first / CHUNK_NODES;
+            if hinges.len() > 0 {
+                let list = &hinges.chunk_hinges[hinges.chunk_off[c]..hinges.chunk_off[c + 1]];
+                hinges.add_forces(list, first, x, chunk);
             }
         };
+        // The same chunks serially or in parallel, so the sums do not depend on the threads.
         if self.n_incidences() + 4 * self.hinges.len() < SERIAL_INCIDENCES {
-            range(0, out);
+            for (c, chunk) in out.chunks_mut(CHUNK_NODES).enumerate() {
+                range(c * CHUNK_NODES, chunk);
+            }
         } else {
             out.par_chunks_mut(CHUNK_NODES)
                 .enumerate()
@@ -538,6 +466,32 @@ fn hinge_topology(lattice: &SpringLattice, active_index: &[u32]) -> (HingeTopolo
                 t.incidence[next[i as usize]] = (h as u32, slot as u8);
                 next[i as usize] += 1;
             }
+        }
+    }
+    let n_chunks = n_active.div_ceil(CHUNK_NODES);
+    let chunks_of = |nodes: &[u32; 4]| {
+        let mut c: Vec<usize> = nodes
+            .iter()
+            .filter(|&&i| i & FIXED == 0)
+            .map(|&i| i as usize / CHUNK_NODES)
+            .collect();
+        c.sort_unstable();
+        c.dedup();
+        c
+    };
+    let mut count = vec![0usize; n_chunks + 1];
+    for nodes in &t.nodes {
+        for c in chunks_of(nodes) {
+            count[c] += 1;
+        }
+    }
+    t.chunk_off = exclusive_scan(&count);
+    t.chunk_hinges = vec![0; t.chunk_off[n_chunks]];
+    let mut next = t.chunk_off.clone();
+    for (h, nodes) in t.nodes.iter().enumerate() {
+        for c in chunks_of(nodes) {
+            t.chunk_hinges[next[c]] = h as u32;
+            next[c] += 1;
         }
     }
     (t, fixed_energy)
