@@ -666,7 +666,11 @@ fn numpy_snippet_reproduces_the_msm_trajectory() {
         .success();
     // (model, integrator: None runs the one the archive records, with no flag to simulate).
     let small = small_msm(dir.path(), true, true);
-    let models: [(PathBuf, Option<&str>); 7] = [
+    // Springs with axial damping and hinges with non-zero rest angles.
+    let cloth = cloth_msm(dir.path(), true);
+    let models: [(PathBuf, Option<&str>); 9] = [
+        (cloth.clone(), Some("symplectic-euler")),
+        (cloth, Some("backward-euler")),
         (small.clone(), Some("symplectic-euler")),
         (small.clone(), Some("verlet")),
         (small.clone(), Some("rk4")),
@@ -850,7 +854,7 @@ print("ok")
 }
 
 /// The SOFA scene: run its `createScene` against a stand-in for SofaPython3's node API and check
-/// the components and their data; a model of linear elements only is refused, a mixed one warns.
+/// the components and their data; a model with linear elements is refused.
 #[test]
 fn sofa_scene_builds_the_graph() {
     let dir = tempfile::tempdir().unwrap();
@@ -877,6 +881,7 @@ fn sofa_scene_builds_the_graph() {
         assert!(text.contains(needle), "{needle}");
     }
 
+    // Springs and linear elements: leaving the elements out would change the model.
     let mixed = small_msm(dir.path(), true, true);
     let a = bin()
         .arg("export")
@@ -884,8 +889,13 @@ fn sofa_scene_builds_the_graph() {
         .args(["--format", "sofa", "--out"])
         .arg(dir.path().join("mixed.py"))
         .assert()
-        .success();
-    assert!(stderr_of(&a).contains("warning: the model's 3 linear elements"));
+        .code(2);
+    let err = stderr_of(&a);
+    assert!(
+        err.contains("3 linear elements") && err.contains("bend_u@boundary"),
+        "{err}"
+    );
+    assert!(!dir.path().join("mixed.py").exists());
     let linear = small_msm(dir.path(), true, false);
     let a = bin()
         .arg("export")
@@ -941,4 +951,144 @@ print("ok")
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// A triangulated `n_u × n_v` cloth (alternating diagonals) with springs on every edge and a
+/// hinge on every interior edge, rest angles left to the file's positions: flat, or with
+/// `curved` a bump (non-zero rest angles). Two corners fixed, gravity, axial damping.
+fn cloth_msm(dir: &Path, curved: bool) -> PathBuf {
+    let (n_u, n_v) = (5, 4);
+    let idx = |i: usize, j: usize| i * n_v + j;
+    let mut nodes = Vec::new();
+    for i in 0..n_u {
+        for j in 0..n_v {
+            let (x, y) = (
+                i as f64 / (n_u - 1) as f64,
+                0.8 * j as f64 / (n_v - 1) as f64,
+            );
+            let z = if curved {
+                0.15 * (2.0 * x).sin() * y.cos()
+            } else {
+                0.0
+            };
+            nodes.push(serde_json::json!({
+                "position": [x, y, z], "mass": 0.01, "damping": 0.002,
+                "fixed": i == 0 && (j == 0 || j == n_v - 1),
+            }));
+        }
+    }
+    let mut triangles = Vec::new();
+    for i in 0..n_u - 1 {
+        for j in 0..n_v - 1 {
+            let (p00, p10, p11, p01) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+            if (i + j) % 2 == 0 {
+                triangles.extend([[p00, p10, p11], [p00, p11, p01]]);
+            } else {
+                triangles.extend([[p00, p10, p01], [p10, p11, p01]]);
+            }
+        }
+    }
+    let (mut springs, mut hinges) = (Vec::new(), Vec::new());
+    let mut first: std::collections::HashMap<(usize, usize), [usize; 3]> = Default::default();
+    for t in &triangles {
+        for c in 0..3 {
+            let (f, to, o) = (t[c], t[(c + 1) % 3], t[(c + 2) % 3]);
+            let key = (f.min(to), f.max(to));
+            let grid = f / n_v == to / n_v || f % n_v == to % n_v;
+            match first.remove(&key) {
+                Some([f0, t0, o0]) => hinges.push(serde_json::json!({
+                    "nodes": [f0, t0, o0, o],
+                    "class": if grid { "hinge" } else { "hinge_diagonal" },
+                    "k": if grid { 0.02 } else { 0.01 },
+                })),
+                None => {
+                    springs.push(serde_json::json!({
+                        "a": f, "b": to, "kind": if grid { "structural" } else { "shear" },
+                        "k": if grid { 40.0 } else { 15.0 }, "damping": 0.01,
+                    }));
+                    first.insert(key, [f, to, o]);
+                }
+            }
+        }
+    }
+    let file = serde_json::json!({
+        "nodes": nodes, "springs": springs, "hinges": hinges, "triangles": triangles,
+        "gravity": [0.0, 0.0, -9.81], "grid": [n_u, n_v],
+        "simulation": {"dt": 0.0005, "t_end": 0.05, "integrator": "symplectic-euler"},
+    });
+    let path = dir.join(if curved {
+        "cloth_curved.json"
+    } else {
+        "cloth_flat.json"
+    });
+    std::fs::write(&path, serde_json::to_string_pretty(&file).unwrap()).unwrap();
+    path
+}
+
+/// Hinges in SOFA: a flat cloth's hinges become `FastTriangularBendingSprings` (with the
+/// conversion said in the header); a curved rest shape, which SOFA's bending energy cannot hold
+/// stress-free, is refused with exit status 2 naming the hinges. The Newton script refuses
+/// linear elements, which Newton's particle model has no counterpart of.
+#[test]
+fn exporters_hold_hinges_or_refuse_what_they_cannot_express() {
+    let dir = tempfile::tempdir().unwrap();
+    let flat = cloth_msm(dir.path(), false);
+    let scene = dir.path().join("cloth.py");
+    let a = bin()
+        .arg("export")
+        .arg(&flat)
+        .args(["--format", "sofa", "--out"])
+        .arg(&scene)
+        .assert()
+        .success();
+    assert!(
+        stderr_of(&a).contains("hinges are FastTriangularBendingSprings"),
+        "{}",
+        stderr_of(&a)
+    );
+    let text = std::fs::read_to_string(&scene).unwrap();
+    for needle in [
+        "FastTriangularBendingSprings",
+        "bendingStiffness",
+        "BENDING = [",
+    ] {
+        assert!(text.contains(needle), "{needle}");
+    }
+
+    let curved = cloth_msm(dir.path(), true);
+    let out = dir.path().join("curved.py");
+    let a = bin()
+        .arg("export")
+        .arg(&curved)
+        .args(["--format", "sofa", "--out"])
+        .arg(&out)
+        .assert()
+        .code(2);
+    let err = stderr_of(&a);
+    assert!(err.contains("hinge") && err.contains("rest angle"), "{err}");
+    assert!(!out.exists(), "nothing written on refusal");
+    // The Newton script holds the curved cloth (rest angles are Newton's too).
+    bin()
+        .arg("export")
+        .arg(&curved)
+        .args(["--format", "newton", "--out"])
+        .arg(dir.path().join("curved_newton.py"))
+        .assert()
+        .success();
+
+    let linear = small_msm(dir.path(), true, true);
+    let out = dir.path().join("linear_newton.py");
+    let a = bin()
+        .arg("export")
+        .arg(&linear)
+        .args(["--format", "newton", "--out"])
+        .arg(&out)
+        .assert()
+        .code(2);
+    let err = stderr_of(&a);
+    assert!(
+        err.contains("3 linear elements") && err.contains("--format npz"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing written on refusal");
 }

@@ -11,15 +11,16 @@
 //! negatives, so the total force is zero up to the rounding of the per-node sums. Springs
 //! between two fixed nodes never move: their energy is a constant, computed once.
 //!
-//! Hinges (docs/math.md §5.2) couple four nodes: each is evaluated once into a per-hinge
-//! buffer of its four node forces (in parallel over hinges), then every active node adds the
-//! entries of its hinges in incidence order (in parallel over nodes), so the result does not
+//! Hinges (docs/math.md §5.2) couple four nodes: each chunk of nodes evaluates the hinges with
+//! a node in the chunk (a hinge across two chunks twice, about one in eight on a 256-wide
+//! grid) and adds their forces to its own nodes only, in the chunk's hinge order; no buffer,
+//! no locks, and the chunks are the same serially and in parallel, so the result does not
 //! depend on the number of threads. A hinge node that is fixed is read from its stored
 //! position.
 
 use rayon::prelude::*;
 
-use crate::hinge::{angle, angle_difference, angle_gradient};
+use crate::hinge::{angle, angle_difference, angle_terms, edge_gradients};
 use crate::spring::{energy, internal_coefficient, sub};
 use crate::{Class, SpringLattice};
 
@@ -80,6 +81,10 @@ pub(crate) struct HingeTopology {
     /// CSR by active node of its `(hinge, slot)` incidences (offsets: `n_active + 1`).
     pub off: Vec<usize>,
     pub incidence: Vec<(u32, u8)>,
+    /// CSR by chunk of [`CHUNK_NODES`] active nodes of the hinges with a node in the chunk,
+    /// in increasing order (a hinge across two chunks is listed in both).
+    pub chunk_off: Vec<usize>,
+    pub chunk_hinges: Vec<u32>,
 }
 
 /// Marks a fixed node in [`HingeTopology::nodes`].
@@ -99,45 +104,32 @@ impl HingeTopology {
     /// The positions of hinge `h`'s nodes, the active ones from `x`.
     #[inline(always)]
     pub fn positions(&self, h: usize, x: &[[f64; 3]]) -> [[f64; 3]; 4] {
-        self.nodes[h].map(|i| {
+        let at = |i: u32| {
             if i & FIXED != 0 {
                 self.fixed_x[(i & !FIXED) as usize]
             } else {
                 x[i as usize]
             }
-        })
-    }
-
-    /// The internal forces `k w (θ − θ0) ∂θ/∂x_i` of every hinge into `buffer` (four per
-    /// hinge).
-    fn hinge_forces(&self, x: &[[f64; 3]], buffer: &mut [[[f64; 3]; 4]]) {
-        let eval = |first: usize, out: &mut [[[f64; 3]; 4]]| {
-            for (i, f) in out.iter_mut().enumerate() {
-                let h = first + i;
-                let g = angle_gradient(&self.positions(h, x));
-                let s = self.kw[h] * angle_difference(g.theta, self.rest[h]);
-                *f = g.grad.map(|gi| [s * gi[0], s * gi[1], s * gi[2]]);
-            }
         };
-        if self.len() < SERIAL_HINGES {
-            eval(0, buffer);
-        } else {
-            buffer
-                .par_chunks_mut(CHUNK_HINGES)
-                .enumerate()
-                .for_each(|(c, out)| eval(c * CHUNK_HINGES, out));
-        }
+        let [a, b, c, d] = self.nodes[h];
+        [at(a), at(b), at(c), at(d)]
     }
 
-    /// Adds the hinge forces of `buffer` to the active nodes `first .. first + out.len()`.
-    fn gather(&self, first: usize, buffer: &[[[f64; 3]; 4]], out: &mut [[f64; 3]]) {
-        for (i, f) in out.iter_mut().enumerate() {
-            let a = first + i;
-            for &(h, slot) in &self.incidence[self.off[a]..self.off[a + 1]] {
-                let g = buffer[h as usize][slot as usize];
-                f[0] += g[0];
-                f[1] += g[1];
-                f[2] += g[2];
+    /// Adds the internal forces `k w (θ − θ0) ∂θ/∂x_i` of the hinges `list` to those of their
+    /// nodes that are active nodes `first .. first + out.len()`, in the list's order.
+    fn add_forces(&self, list: &[u32], first: usize, x: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        for &h in list {
+            let h = h as usize;
+            let (theta, g2, g3, t2, t3) = angle_terms(&self.positions(h, x));
+            let s = self.kw[h] * angle_difference(theta, self.rest[h]);
+            let [g0, g1] = edge_gradients(g2, g3, t2, t3);
+            for (&i, g) in self.nodes[h].iter().zip([g0, g1, g2, g3]) {
+                // A fixed node's index has the FIXED bit and is never in range.
+                if let Some(f) = (i as usize).checked_sub(first).and_then(|r| out.get_mut(r)) {
+                    f[0] += s * g[0];
+                    f[1] += s * g[1];
+                    f[2] += s * g[2];
+                }
             }
         }
     }
@@ -288,25 +280,26 @@ impl Topology {
 
     /// Internal force `f_int = −f_elastic` (paper eq. (5) with the sign of a stiffness) on every
     /// active node: `out[a] = Σ_b k w (1 − l/|d|) d`, `d = x_a − x_b`, with `x` the active
-    /// positions, plus `Σ_hinges k w (θ − θ0) ∂θ/∂x_a` (docs/math.md §5.2). Without hinges
-    /// allocation-free; parallel over chunks of nodes (and hinges) for large lattices.
+    /// positions, plus `Σ_hinges k w (θ − θ0) ∂θ/∂x_a` (docs/math.md §5.2). Allocation-free;
+    /// parallel over chunks of nodes (and hinges) for large lattices.
     pub fn internal_forces(&self, x: &[[f64; 3]], out: &mut [[f64; 3]]) {
         let n = self.n_active();
         assert_eq!(x.len(), n, "positions of {n} active nodes expected");
         assert_eq!(out.len(), n, "forces of {n} active nodes expected");
-        let buffer = (self.hinges.len() > 0).then(|| {
-            let mut b = vec![[[0.0; 3]; 4]; self.hinges.len()];
-            self.hinges.hinge_forces(x, &mut b);
-            b
-        });
+        let hinges = &self.hinges;
         let range = |first: usize, chunk: &mut [[f64; 3]]| {
             self.forces_range(first, x, chunk);
-            if let Some(b) = &buffer {
-                self.hinges.gather(first, b, chunk);
+            let c = first / CHUNK_NODES;
+            if hinges.len() > 0 {
+                let list = &hinges.chunk_hinges[hinges.chunk_off[c]..hinges.chunk_off[c + 1]];
+                hinges.add_forces(list, first, x, chunk);
             }
         };
+        // The same chunks serially or in parallel, so the sums do not depend on the threads.
         if self.n_incidences() + 4 * self.hinges.len() < SERIAL_INCIDENCES {
-            range(0, out);
+            for (c, chunk) in out.chunks_mut(CHUNK_NODES).enumerate() {
+                range(c * CHUNK_NODES, chunk);
+            }
         } else {
             out.par_chunks_mut(CHUNK_NODES)
                 .enumerate()
@@ -473,6 +466,32 @@ fn hinge_topology(lattice: &SpringLattice, active_index: &[u32]) -> (HingeTopolo
                 t.incidence[next[i as usize]] = (h as u32, slot as u8);
                 next[i as usize] += 1;
             }
+        }
+    }
+    let n_chunks = n_active.div_ceil(CHUNK_NODES);
+    let chunks_of = |nodes: &[u32; 4]| {
+        let mut c: Vec<usize> = nodes
+            .iter()
+            .filter(|&&i| i & FIXED == 0)
+            .map(|&i| i as usize / CHUNK_NODES)
+            .collect();
+        c.sort_unstable();
+        c.dedup();
+        c
+    };
+    let mut count = vec![0usize; n_chunks + 1];
+    for nodes in &t.nodes {
+        for c in chunks_of(nodes) {
+            count[c] += 1;
+        }
+    }
+    t.chunk_off = exclusive_scan(&count);
+    t.chunk_hinges = vec![0; t.chunk_off[n_chunks]];
+    let mut next = t.chunk_off.clone();
+    for (h, nodes) in t.nodes.iter().enumerate() {
+        for c in chunks_of(nodes) {
+            t.chunk_hinges[next[c]] = h as u32;
+            next[c] += 1;
         }
     }
     (t, fixed_energy)

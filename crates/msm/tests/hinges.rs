@@ -542,6 +542,26 @@ fn hinge_forces_do_not_depend_on_the_threads() {
     assert_eq!(f1, f4);
     assert_eq!(e1, e4);
     assert_eq!(k1.values(), k4.values());
+    // The force kernel works in chunks of 2048 nodes, each adding the hinges with a node in it:
+    // at the nodes on either side of a chunk boundary the force is still the energy's gradient
+    // (central differences).
+    let scale = f1.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    for node in [2046, 2047, 2048, 2049, 4095, 4096] {
+        for c in 0..3 {
+            let i = 3 * node + c;
+            let h = 1e-6;
+            let mut qp = q.clone();
+            qp[i] += h;
+            let mut qm = q.clone();
+            qm[i] -= h;
+            let fd = (model.potential_energy(&qp) - model.potential_energy(&qm)) / (2.0 * h);
+            assert!(
+                (fd - f1[i]).abs() <= 1e-6 * scale,
+                "dof {i}: {fd} vs {}",
+                f1[i]
+            );
+        }
+    }
 }
 
 /// msm.json carries hinges, weights, axial damping and triangles; a file without them loads

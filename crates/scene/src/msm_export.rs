@@ -89,7 +89,15 @@ pub fn npz_arrays(setup: &MsmSetup) -> Vec<(&'static str, NpyArray)> {
         ),
         (
             "spring_k",
-            NpyArray::f64(springs.iter().map(|s| s.k).collect()),
+            NpyArray::f64(springs.iter().map(|s| s.stiffness()).collect()),
+        ),
+        (
+            "spring_weight",
+            NpyArray::f64(springs.iter().map(|s| s.weight).collect()),
+        ),
+        (
+            "spring_damping",
+            NpyArray::f64(springs.iter().map(|s| s.damping).collect()),
         ),
         (
             "spring_rest_length",
@@ -129,6 +137,56 @@ pub fn npz_arrays(setup: &MsmSetup) -> Vec<(&'static str, NpyArray)> {
             "element_class",
             NpyArray::strings(lattice.elements.iter().map(|e| e.class().name()).collect()),
         ),
+        (
+            "hinges",
+            matrix(
+                NpyArray::i64(
+                    lattice
+                        .hinges
+                        .iter()
+                        .flat_map(|h| h.nodes.map(|a| a as i64))
+                        .collect(),
+                ),
+                4,
+                lattice.hinges.len(),
+            ),
+        ),
+        (
+            "hinge_k",
+            NpyArray::f64(lattice.hinges.iter().map(|h| h.stiffness()).collect()),
+        ),
+        (
+            "hinge_weight",
+            NpyArray::f64(lattice.hinges.iter().map(|h| h.weight).collect()),
+        ),
+        (
+            "hinge_rest_angle",
+            NpyArray::f64(lattice.hinges.iter().map(|h| h.rest_angle).collect()),
+        ),
+        (
+            "hinge_kind",
+            NpyArray::strings(
+                lattice
+                    .hinges
+                    .iter()
+                    .map(|h| h.kind.name().to_string())
+                    .collect(),
+            ),
+        ),
+        (
+            "triangles",
+            matrix(
+                NpyArray::i64(
+                    lattice
+                        .triangles
+                        .iter()
+                        .flat_map(|t| t.map(|a| a as i64))
+                        .collect(),
+                ),
+                3,
+                lattice.triangles.len(),
+            ),
+        ),
         ("dt", NpyArray::scalar(setup.run.dt)),
         ("t_end", NpyArray::scalar(setup.run.t_end)),
         ("integrator", NpyArray::string(setup.run.integrator.name())),
@@ -159,31 +217,202 @@ pub fn write_msm_npz(path: &Path, setup: &MsmSetup) -> Result<(), Error> {
     Ok(write_npz(path, &npz_arrays(setup))?)
 }
 
+/// Largest rest angle of a hinge that SOFA's `FastTriangularBendingSprings` holds [rad]: its
+/// energy has no rest angle, so only a flat rest shape is stress-free in it (the round-off of
+/// a flat lattice's angles is ~1e-16).
+pub const SOFA_FLAT_REST: f64 = 1e-9;
+
+/// One `FastTriangularBendingSprings` of a SOFA scene: its `bendingStiffness` and the
+/// triangles of its `MeshTopology`, whose interior edges are exactly its hinges.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SofaBending {
+    /// `bendingStiffness`.
+    pub stiffness: f64,
+    /// The triangles (pairs of each hinge's two triangles).
+    pub triangles: Vec<[usize; 3]>,
+    /// Indices of the model's hinges it holds.
+    pub hinges: Vec<usize>,
+}
+
+/// The `bendingStiffness` `b` of SOFA's `FastTriangularBendingSprings` that gives a flat hinge
+/// of stiffness `k w` (nodes at `x`: edge x0–x1, wings x2, x3) our energy `½ k w θ²` to second
+/// order in θ: SOFA's energy is `½ λ |R|²` with `λ = (2/3) l b (h_A + h_B) / (h_A² h_B²)` and
+/// `|R| = θ h_A h_B / (h_A + h_B) + O(θ²)` (Volino & Magnenat-Thalmann 2006; docs/export.md),
+/// so `b = 3 k w (h_A + h_B) / (2 l)`.
+///
+/// ```
+/// use nurbspring_scene::msm_export::sofa_bending_stiffness;
+/// // A unit square cut along its diagonal: l = √2, h_A = h_B = 1/√2, so b = 3 k w / 2.
+/// let x = [[0., 0., 0.], [1., 1., 0.], [1., 0., 0.], [0., 1., 0.]];
+/// assert!((sofa_bending_stiffness(&x, 2.0) - 3.0).abs() < 1e-15);
+/// ```
+pub fn sofa_bending_stiffness(x: &[[f64; 3]; 4], kw: f64) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let e = sub(x[1], x[0]);
+    let l = norm(e);
+    let h_a = norm(cross(e, sub(x[2], x[0]))) / l;
+    let h_b = norm(cross(sub(x[3], x[0]), e)) / l;
+    1.5 * kw * (h_a + h_b) / l
+}
+
+/// The hinges of a lattice as SOFA `FastTriangularBendingSprings` components, or why SOFA
+/// cannot hold them: a rest angle beyond [`SOFA_FLAT_REST`] (SOFA's energy has none). Each
+/// component holds one bending stiffness and makes a bending spring on every edge that two of
+/// the triangles of its topology share. Hinges with one converted stiffness
+/// ([`sofa_bending_stiffness`], equal to 1e-12) share a component when the shared edges of
+/// their triangles are exactly those hinges, and are otherwise split into components whose
+/// hinges' triangles share no edge (each component's shared edges are then its hinges alone).
+/// A model whose hinges all differ gets one component per hinge.
+pub fn sofa_bending(lattice: &nurbspring_msm::SpringLattice) -> Result<Vec<SofaBending>, String> {
+    use std::collections::HashMap;
+    if let Some((i, h)) = lattice
+        .hinges
+        .iter()
+        .enumerate()
+        .find(|(_, h)| h.rest_angle.abs() > SOFA_FLAT_REST)
+    {
+        return Err(format!(
+            "hinge {i} has the rest angle {:.6} rad: SOFA's FastTriangularBendingSprings (the \
+             bending force field SOFA ships) has no rest angle, its energy 1/2 lambda |R|^2 \
+             vanishes only when the two triangles are flat, so a curved rest shape would be \
+             loaded at rest; export it with --format newton or npz",
+            h.rest_angle
+        ));
+    }
+    let stiffness: Vec<f64> = lattice
+        .hinges
+        .iter()
+        .map(|h| sofa_bending_stiffness(&h.nodes.map(|a| lattice.positions[a]), h.stiffness()))
+        .collect();
+    // Groups of one stiffness (to 1e-12), in order of first appearance.
+    let mut groups: Vec<(f64, Vec<usize>)> = Vec::new();
+    for (i, &b) in stiffness.iter().enumerate() {
+        match groups
+            .iter_mut()
+            .find(|(g, _)| (g - b).abs() <= 1e-12 * g.abs().max(b.abs()))
+        {
+            Some((_, members)) => members.push(i),
+            None => groups.push((b, vec![i])),
+        }
+    }
+    let triangles_of = |i: usize| {
+        let [x0, x1, x2, x3] = lattice.hinges[i].nodes;
+        [[x0, x1, x2], [x1, x0, x3]]
+    };
+    let key = |t: [usize; 3]| {
+        let mut k = t;
+        k.sort_unstable();
+        k
+    };
+    let mut out = Vec::new();
+    for (b, members) in groups {
+        // The union of the group's triangles, and the edges two of them share.
+        let mut triangles: Vec<[usize; 3]> = Vec::new();
+        let mut seen = HashMap::new();
+        for &i in &members {
+            for t in triangles_of(i) {
+                if seen.insert(key(t), ()).is_none() {
+                    triangles.push(t);
+                }
+            }
+        }
+        let mut edges: HashMap<(usize, usize), usize> = HashMap::new();
+        for t in &triangles {
+            for c in 0..3 {
+                let (p, q) = (t[c], t[(c + 1) % 3]);
+                *edges.entry((p.min(q), p.max(q))).or_insert(0) += 1;
+            }
+        }
+        let mut interior: Vec<(usize, usize)> = edges
+            .iter()
+            .filter(|(_, n)| **n >= 2)
+            .map(|(e, _)| *e)
+            .collect();
+        interior.sort_unstable();
+        let mut own: Vec<(usize, usize)> = members
+            .iter()
+            .map(|&i| {
+                let [x0, x1, ..] = lattice.hinges[i].nodes;
+                (x0.min(x1), x0.max(x1))
+            })
+            .collect();
+        own.sort_unstable();
+        if interior == own && edges.values().all(|&n| n <= 2) {
+            out.push(SofaBending {
+                stiffness: b,
+                triangles,
+                hinges: members,
+            });
+            continue;
+        }
+        // Colour the hinges so that no two of a colour share an edge of their triangles: then
+        // every edge of a colour's triangles lies on one triangle, except the colour's hinges,
+        // which lie on two, and SOFA finds exactly those hinges in the colour's topology.
+        let edges_of = |i: usize| {
+            let mut e: Vec<(usize, usize)> = triangles_of(i)
+                .iter()
+                .flat_map(|t| {
+                    (0..3).map(move |c| (t[c].min(t[(c + 1) % 3]), t[c].max(t[(c + 1) % 3])))
+                })
+                .collect();
+            e.sort_unstable();
+            e.dedup();
+            e
+        };
+        let mut colours: Vec<(HashMap<(usize, usize), ()>, SofaBending)> = Vec::new();
+        for &i in &members {
+            let edges = edges_of(i);
+            let free = colours
+                .iter_mut()
+                .find(|(used, _)| edges.iter().all(|e| !used.contains_key(e)));
+            let (used, component) = match free {
+                Some(c) => c,
+                None => {
+                    colours.push((
+                        HashMap::new(),
+                        SofaBending {
+                            stiffness: b,
+                            triangles: Vec::new(),
+                            hinges: Vec::new(),
+                        },
+                    ));
+                    colours.last_mut().expect("pushed")
+                }
+            };
+            for e in edges {
+                used.insert(e, ());
+            }
+            component.triangles.extend(triangles_of(i));
+            component.hinges.push(i);
+        }
+        out.extend(colours.into_iter().map(|(_, c)| c));
+    }
+    Ok(out)
+}
+
 /// What SOFA's components cannot hold of a model, said once for messages and the scene's header.
 pub fn sofa_limitations(setup: &MsmSetup) -> Vec<String> {
     let lattice = setup.model.lattice();
     let mut out = Vec::new();
-    if !lattice.elements.is_empty() {
+    if !lattice.hinges.is_empty() {
         out.push(format!(
-            "the model's {} linear elements (energy 1/2 k w |sum_i c_i u_i|^2 on the displacements \
-             u = x - x(0)) are not in the SOFA scene: SOFA's spring components have a scalar rest \
-             length, not a rest vector, and the bend and twist stencils couple 3 or 4 nodes; \
-             use --format npz for the whole model",
-            lattice.elements.len()
+            "the model's {} hinges are FastTriangularBendingSprings (Volino's linear bending, \
+             energy 1/2 lambda |R|^2 of the bending vector R): bendingStiffness converted so \
+             that it equals nurbspring's 1/2 k w theta^2 to second order about the flat rest \
+             state; |R| follows the chord of a folded wing, not its angle, so SOFA's energy is \
+             (2 sin(theta/2)/theta)^2 of ours (0.08 % less at 0.1 rad, 2.1 % at 0.5 rad, 8.1 % at \
+             1 rad), and its bending vector also grows under in-plane motion of the nodes, which \
+             ours does not (docs/export.md)",
+            lattice.hinges.len()
         ));
-    }
-    let free_damping: Vec<f64> = setup
-        .model
-        .free_nodes()
-        .iter()
-        .map(|&a| lattice.damping[a])
-        .collect();
-    if free_damping.windows(2).any(|w| w[0] != w[1]) {
-        out.push(
-            "the node damping varies from node to node; SOFA's UniformVelocityDampingForceField \
-             holds one coefficient, so the scene uses their mean"
-                .to_string(),
-        );
     }
     if !matches!(
         setup.run.integrator,
@@ -224,39 +453,59 @@ fn py_floats(v: &[f64]) -> String {
 }
 
 /// The SOFA scene (SofaPython3 `createScene`) of an MSM, or why SOFA cannot hold it: a model
-/// whose only elastic forces are linear elements has nothing SOFA's springs can express.
+/// with linear elements (SOFA's springs cannot express them), with node damping that varies
+/// from node to node, or with hinges SOFA's bending cannot hold ([`sofa_bending`]).
 pub fn sofa_scene(setup: &MsmSetup, source: &str, file_name: &str) -> Result<String, String> {
     let lattice = setup.model.lattice();
-    if lattice.springs.is_empty() && !lattice.elements.is_empty() {
+    if !lattice.elements.is_empty() {
+        let mut classes: Vec<String> = lattice.elements.iter().map(|e| e.class().name()).collect();
+        classes.sort();
+        classes.dedup();
         return Err(format!(
-            "the model has no springs, only {} linear elements (energy 1/2 k w |sum_i c_i u_i|^2 on \
+            "the model has {} linear elements (classes {}; energy 1/2 k w |sum_i c_i u_i|^2 on \
              the displacements), which SOFA's spring components cannot express (a scalar rest \
-             length, two nodes); export it with --format npz, or derive a spring model with \
-             `derive --derivation paper`",
-            lattice.elements.len()
+             length, two nodes), and leaving them out would change the model; export it with \
+             --format npz{}",
+            lattice.elements.len(),
+            classes.join(", "),
+            if lattice.springs.is_empty() {
+                ", or derive a spring model with `derive --derivation paper`"
+            } else {
+                ""
+            }
         ));
     }
+    let free = setup.model.free_nodes();
+    if let Some(w) = free
+        .windows(2)
+        .find(|w| lattice.damping[w[0]] != lattice.damping[w[1]])
+    {
+        return Err(format!(
+            "its node damping varies from node to node (gamma = {} at node {}, {} at node {}), \
+             and SOFA's UniformVelocityDampingForceField holds one coefficient; export it with \
+             --format newton or npz",
+            lattice.damping[w[0]], w[0], lattice.damping[w[1]], w[1]
+        ));
+    }
+    let bending = sofa_bending(lattice)?;
     let (x0, v0) = initial_nodes(setup);
     let fixed: Vec<usize> = (0..lattice.n_nodes())
         .filter(|&a| lattice.fixed[a])
         .collect();
-    let free = setup.model.free_nodes();
-    let damping = if free.is_empty() {
-        0.0
-    } else {
-        free.iter().map(|&a| lattice.damping[a]).sum::<f64>() / free.len() as f64
-    };
+    // One coefficient: the free nodes' (checked equal above).
+    let damping = free.first().map_or(0.0, |&a| lattice.damping[a]);
     let limitations = sofa_limitations(setup);
     let mut s = String::new();
     let _ = writeln!(
         s,
         "\"\"\"SOFA scene of a nurbspring mass-spring model, written by `nurbspring export --format sofa`.\n\n\
          Source: {source}\n\
-         {} nodes ({} fixed), {} springs. Run it with `runSofa {file_name}` (SOFA 24.06 or later\n\
-         with SofaPython3) or load it from Python with `Sofa.Simulation`.",
+         {} nodes ({} fixed), {} springs, {} hinges. Run it with `runSofa {file_name}` (SOFA 24.06\n\
+         or later with SofaPython3) or load it from Python with `Sofa.Simulation`.",
         lattice.n_nodes(),
         fixed.len(),
-        lattice.springs.len()
+        lattice.springs.len(),
+        lattice.hinges.len()
     );
     if limitations.is_empty() {
         s.push_str("\nSOFA holds every part of this model.\n");
@@ -267,8 +516,8 @@ pub fn sofa_scene(setup: &MsmSetup, source: &str, file_name: &str) -> Result<Str
         }
     }
     s.push_str(
-        "\nnurbspring's springs have no damping of their own (kd = 0 below); its damping is a force\n\
-         -gamma v on every free node (UniformVelocityDampingForceField).\n\"\"\"\n\n",
+        "\nA spring's kd is nurbspring's axial damping c (the force -c ((v_a - v_b).n) n, as SOFA's\n\
+         SpringForceField has it); the node damping -gamma v is UniformVelocityDampingForceField.\n\"\"\"\n\n",
     );
     let _ = writeln!(s, "GRAVITY = {}", py_floats(&lattice.gravity));
     let _ = writeln!(s, "DT = {:?}", setup.run.dt);
@@ -310,9 +559,28 @@ pub fn sofa_scene(setup: &MsmSetup, source: &str, file_name: &str) -> Result<Str
     for sp in &lattice.springs {
         let _ = writeln!(
             s,
-            "    ({}, {}, {:?}, 0.0, {:?}),",
-            sp.a, sp.b, sp.k, sp.rest_length
+            "    ({}, {}, {:?}, {:?}, {:?}),",
+            sp.a,
+            sp.b,
+            sp.stiffness(),
+            sp.damping,
+            sp.rest_length
         );
+    }
+    s.push_str("]\n\n");
+    s.push_str(
+        "# FastTriangularBendingSprings components: bendingStiffness and the triangles of their\n\
+         # MeshTopology (the interior edges of each topology are its hinges).\nBENDING = [\n",
+    );
+    for b in &bending {
+        let _ = write!(s, "    ({:?}, [", b.stiffness);
+        for (i, t) in b.triangles.iter().enumerate() {
+            if i > 0 {
+                s.push_str(", ");
+            }
+            let _ = write!(s, "[{}, {}, {}]", t[0], t[1], t[2]);
+        }
+        s.push_str("]),\n");
     }
     s.push_str("]\n\n");
     s.push_str(
@@ -343,6 +611,7 @@ def createScene(root):
         "Sofa.Component.LinearSolver.Iterative", "Sofa.Component.StateContainer",
         "Sofa.Component.Mass", "Sofa.Component.SolidMechanics.Spring",
         "Sofa.Component.Constraint.Projective", "Sofa.Component.MechanicalLoad",
+        "Sofa.Component.Topology.Container.Constant",
     ])
     root.addObject("DefaultAnimationLoop")
     body = root.addChild("msm")
@@ -353,6 +622,15 @@ def createScene(root):
     if SPRINGS:
         body.addObject("SpringForceField", name="springs", template="Vec3d",
                        spring=" ".join(" ".join(str(x) for x in s) for s in SPRINGS))
+    if BENDING:
+        # A topology of every node first, so that components looking for the node's topology
+        # (the mass) find one of the right size; each bending component links its own.
+        body.addObject("MeshTopology", name="topology", position=REST_POSITIONS,
+                       triangles=sorted({tuple(t) for _, ts in BENDING for t in ts}))
+    for c, (stiffness, triangles) in enumerate(BENDING):
+        body.addObject("MeshTopology", name=f"bendingTopology{c}", triangles=triangles)
+        body.addObject("FastTriangularBendingSprings", name=f"bending{c}",
+                       bendingStiffness=stiffness, topology=f"@bendingTopology{c}")
     if FIXED:
         body.addObject(FIXED_CONSTRAINT, name="fixed", indices=FIXED)
     if NODE_DAMPING > 0.0:
@@ -381,4 +659,323 @@ pub fn write_msm_sofa(path: &Path, setup: &MsmSetup, source: &str) -> Result<Vec
     })?;
     write_atomic_bytes(path, text.as_bytes())?;
     Ok(sofa_limitations(setup))
+}
+
+/// Newton's `edge_ke` for a hinge of stiffness `k w` at rest positions `x` (edge x0–x1, wings
+/// x2, x3), used by the script's `--bending newton`: Newton's semi-implicit bending force is
+/// `−edge_ke |e| (θ − θ0) d_i` with `d_i = |N_i| ∂θ/∂x_i` for the wings (the triangle's doubled
+/// area times our gradient, the edge nodes mixing both), so with equal triangle areas it is
+/// ours when `edge_ke = k w / (|e| |N|)`; the mean of the two areas is used.
+pub fn newton_edge_ke(x: &[[f64; 3]; 4], kw: f64) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let e = sub(x[1], x[0]);
+    let n1 = norm(cross(e, sub(x[2], x[0])));
+    let n2 = norm(cross(sub(x[3], x[0]), e));
+    kw / (norm(e) * 0.5 * (n1 + n2))
+}
+
+/// How Newton runs a model, or why it cannot: the substeps of Δt its semi-implicit solver
+/// (symplectic Euler) takes, as `simulate` schedules symplectic Euler (below the lattice's
+/// stability limit), and what the script does differently from the model's own run.
+pub fn newton_plan(setup: &MsmSetup) -> Result<(usize, Vec<String>), String> {
+    let lattice = setup.model.lattice();
+    if !lattice.elements.is_empty() {
+        return Err(format!(
+            "the model has {} linear elements (energy 1/2 k w |sum_i c_i u_i|^2 on the \
+             displacements), which Newton's particle model (springs, triangles, bending edges, \
+             tetrahedra) cannot express; export it with --format npz",
+            lattice.elements.len()
+        ));
+    }
+    let dt = setup.run.dt;
+    let (schedule, _) = nurbspring_sim::Schedule::stable(
+        &setup.model,
+        &setup.initial.q,
+        IntegratorKind::SymplecticEuler,
+        dt,
+    )
+    .map_err(|e| format!("its stability limit cannot be computed: {e}"))?;
+    if schedule.integrator != IntegratorKind::SymplecticEuler {
+        return Err(format!(
+            "dt = {dt} is above the explicit stability limit of the model (or needs more than {} \
+             substeps below it), and Newton's SolverSemiImplicit is explicit (symplectic Euler); \
+             run it with a smaller simulation.dt",
+            nurbspring_sim::MAX_SUBSTEPS
+        ));
+    }
+    let mut notes = Vec::new();
+    if setup.run.integrator != IntegratorKind::SymplecticEuler {
+        notes.push(format!(
+            "the model records the integrator {}; Newton's SolverSemiImplicit is symplectic \
+             Euler, which the script runs ({} substeps per step of {dt})",
+            setup.run.integrator.name(),
+            schedule.substeps
+        ));
+    }
+    Ok((schedule.substeps, notes))
+}
+
+/// The Newton script (NVIDIA Newton, the Warp-based engine: `pip install newton`) of an MSM:
+/// it builds the model with Newton's `ModelBuilder` (particles, springs, and for `--bending
+/// newton` bending edges), steps it with `SolverSemiImplicit` on the CPU (or a named device) and
+/// writes the probes' trajectory as `trajectory.csv` does (docs/export.md).
+pub fn newton_script(setup: &MsmSetup, source: &str, file_name: &str) -> Result<String, String> {
+    let lattice = setup.model.lattice();
+    let (substeps, notes) = newton_plan(setup)?;
+    let (x0, v0) = initial_nodes(setup);
+    let fixed: Vec<bool> = lattice.fixed.clone();
+    let curve = lattice.grid.is_some_and(|(_, n_v)| n_v == 1);
+    let labels: Vec<String> = setup
+        .probe_nodes
+        .iter()
+        .map(|&a| crate::run::probe_label(Some(a), lattice.params.as_ref().map(|p| p[a]), curve))
+        .collect();
+    let header = crate::run::trajectory_header(&labels).join(",");
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "\"\"\"Newton scene of a nurbspring mass-spring model, written by `nurbspring export --format newton`.\n\n\
+         Source: {source}\n\
+         {} nodes ({} fixed), {} springs, {} hinges. NVIDIA Newton (the Warp-based physics engine,\n\
+         `pip install newton`; written for newton 1.8 with warp-lang 1.19) builds it with its\n\
+         ModelBuilder and steps it with SolverSemiImplicit (symplectic Euler, nurbspring's\n\
+         `symplectic-euler`), Δt = DT in SUBSTEPS substeps, on the CPU unless --device says otherwise.\n\n\
+         usage: python3 {file_name} [trajectory.csv] [--device cpu|cuda:0] [--bending nurbspring|newton]\n\n\
+         It writes the probe nodes' trajectory in the format of nurbspring's trajectory.csv.\n\n\
+         Newton's own components: particles (fixed nodes without the ACTIVE flag), springs (ke = k w,\n\
+         kd = the spring's axial damping c, rest lengths the model's), gravity, the semi-implicit\n\
+         solver. Added by this script as Warp kernels that add to the particle forces before each\n\
+         step (docs/export.md): the node damping -gamma v and node forces (Newton's particles have\n\
+         neither), and by default the hinges with nurbspring's force k w (theta - theta0) dtheta/dx,\n\
+         the gradient of 1/2 k w (theta - theta0)^2. `--bending newton` runs the hinges as Newton's\n\
+         own bending edges instead, edge_ke converted at rest: Newton's bending force is not the\n\
+         gradient of an energy (it scales each wing's term by its triangle's current area and the\n\
+         edge's current length), so it equals nurbspring's only to first order about the rest state\n\
+         and for triangles of equal area. Newton works in single precision (float32).",
+        lattice.n_nodes(),
+        fixed.iter().filter(|&&f| f).count(),
+        lattice.springs.len(),
+        lattice.hinges.len()
+    );
+    if !notes.is_empty() {
+        s.push_str("\nNot as nurbspring runs it:\n");
+        for n in &notes {
+            let _ = writeln!(s, "- {n}.");
+        }
+    }
+    s.push_str("\"\"\"\nimport argparse\nimport math\n\nimport numpy as np\n\n");
+    let _ = writeln!(s, "GRAVITY = {}", py_floats(&lattice.gravity));
+    let _ = writeln!(s, "DT = {:?}", setup.run.dt);
+    let _ = writeln!(s, "SUBSTEPS = {substeps}");
+    let _ = writeln!(s, "T_END = {:?}", setup.run.t_end);
+    let _ = writeln!(s, "SAVE_EVERY = {}", setup.save_every);
+    let _ = writeln!(
+        s,
+        "PROBES = [{}]",
+        setup
+            .probe_nodes
+            .iter()
+            .map(usize::to_string)
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let _ = writeln!(s, "HEADER = {header:?}\n");
+    let _ = writeln!(s, "POSITIONS = {}\n", py_list3(&x0));
+    let _ = writeln!(s, "VELOCITIES = {}\n", py_list3(&v0));
+    let _ = writeln!(s, "MASSES = {}\n", py_floats(&lattice.masses));
+    let _ = writeln!(
+        s,
+        "FIXED = [{}]\n",
+        fixed
+            .iter()
+            .map(|&f| if f { "True" } else { "False" })
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let _ = writeln!(s, "NODE_DAMPING = {}\n", py_floats(&lattice.damping));
+    if lattice.forces.is_empty() {
+        s.push_str("FORCES = None\n\n");
+    } else {
+        let _ = writeln!(s, "FORCES = {}\n", py_list3(&lattice.forces));
+    }
+    s.push_str(
+        "# One spring per row: node a, node b, ke = k w, kd = c, rest length.\nSPRINGS = [\n",
+    );
+    for sp in &lattice.springs {
+        let _ = writeln!(
+            s,
+            "    ({}, {}, {:?}, {:?}, {:?}),",
+            sp.a,
+            sp.b,
+            sp.stiffness(),
+            sp.damping,
+            sp.rest_length
+        );
+    }
+    s.push_str("]\n\n");
+    s.push_str(
+        "# One hinge per row: edge x0, x1, wing x2 of (x0, x1, x2), wing x3 of (x1, x0, x3),\n\
+         # k w, rest angle theta0, Newton's edge_ke for --bending newton.\nHINGES = [\n",
+    );
+    for h in &lattice.hinges {
+        let x = h.nodes.map(|a| lattice.positions[a]);
+        let _ = writeln!(
+            s,
+            "    ({}, {}, {}, {}, {:?}, {:?}, {:?}),",
+            h.nodes[0],
+            h.nodes[1],
+            h.nodes[2],
+            h.nodes[3],
+            h.stiffness(),
+            h.rest_angle,
+            newton_edge_ke(&x, h.stiffness())
+        );
+    }
+    s.push_str("]\n");
+    s.push_str(NEWTON_RUNNER);
+    Ok(s)
+}
+
+/// The code of the Newton script after its data.
+const NEWTON_RUNNER: &str = r#"
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", nargs="?", default="trajectory_newton.csv")
+    parser.add_argument("--device", default="cpu")
+    parser.add_argument("--bending", choices=["nurbspring", "newton"], default="nurbspring")
+    args = parser.parse_args()
+
+    import warp as wp
+
+    wp.config.quiet = True
+    import newton
+
+    wp.init()
+
+    @wp.kernel
+    def node_forces(v: wp.array(dtype=wp.vec3), gamma: wp.array(dtype=float),
+                    force: wp.array(dtype=wp.vec3), f: wp.array(dtype=wp.vec3)):
+        # f += f_node - gamma v (nurbspring's node damping and node forces).
+        i = wp.tid()
+        f[i] = f[i] + force[i] - gamma[i] * v[i]
+
+    @wp.kernel
+    def hinge_forces(x: wp.array(dtype=wp.vec3), nodes: wp.array2d(dtype=int),
+                     kw: wp.array(dtype=float), rest: wp.array(dtype=float),
+                     f: wp.array(dtype=wp.vec3)):
+        # The elastic force -k w (theta - theta0) dtheta/dx_i of a hinge (docs/math.md §5.2).
+        h = wp.tid()
+        i0 = nodes[h, 0]
+        i1 = nodes[h, 1]
+        i2 = nodes[h, 2]
+        i3 = nodes[h, 3]
+        e = x[i1] - x[i0]
+        a = x[i2] - x[i0]
+        b = x[i3] - x[i0]
+        n1 = wp.cross(e, a)
+        n2 = wp.cross(b, e)
+        l2 = wp.dot(e, e)
+        l = wp.sqrt(l2)
+        theta = wp.atan2(wp.dot(e, wp.cross(n1, n2)), l * wp.dot(n1, n2))
+        d = theta - rest[h]
+        if d > wp.pi:
+            d = d - 2.0 * wp.pi
+        if d <= -wp.pi:
+            d = d + 2.0 * wp.pi
+        g2 = n1 * (-l / wp.dot(n1, n1))
+        g3 = n2 * (-l / wp.dot(n2, n2))
+        t2 = wp.dot(a, e) / l2
+        t3 = wp.dot(b, e) / l2
+        s = -kw[h] * d
+        wp.atomic_add(f, i0, (g2 * (t2 - 1.0) + g3 * (t3 - 1.0)) * s)
+        wp.atomic_add(f, i1, (g2 * (-t2) - g3 * t3) * s)
+        wp.atomic_add(f, i2, g2 * s)
+        wp.atomic_add(f, i3, g3 * s)
+
+    builder = newton.ModelBuilder(gravity=tuple(GRAVITY))
+    for a, (x, v) in enumerate(zip(POSITIONS, VELOCITIES)):
+        builder.add_particle(pos=wp.vec3(*x), vel=wp.vec3(*v),
+                             mass=0.0 if FIXED[a] else MASSES[a],
+                             flags=0 if FIXED[a] else int(newton.ParticleFlags.ACTIVE))
+    for a, b, ke, kd, rest in SPRINGS:
+        builder.add_spring(a, b, ke, kd, 0.0)
+    if args.bending == "newton":
+        # Newton's edge (i, j, k, l): wings i, j, edge k -> l; triangles (i, k, l), (j, l, k).
+        for x0, x1, x2, x3, kw, rest, edge_ke in HINGES:
+            builder.add_edge(x2, x3, x0, x1, rest=rest, edge_ke=edge_ke, edge_kd=0.0)
+    model = builder.finalize(device=args.device)
+    model.particle_grid = None  # no particle-particle contact
+    model.particle_max_velocity = 1.0e30
+    if SPRINGS:
+        # The model's rest lengths (Newton's builder takes the initial distances).
+        model.spring_rest_length.assign(np.array([sp[4] for sp in SPRINGS], dtype=np.float32))
+    gamma = wp.array(np.array(NODE_DAMPING, dtype=np.float32), dtype=float, device=args.device)
+    force = wp.array(np.array(FORCES if FORCES is not None else [[0.0] * 3] * len(POSITIONS),
+                              dtype=np.float32), dtype=wp.vec3, device=args.device)
+    own_hinges = args.bending == "nurbspring" and len(HINGES) > 0
+    if own_hinges:
+        nodes = wp.array(np.array([h[:4] for h in HINGES], dtype=np.int32), dtype=int,
+                         device=args.device)
+        kw = wp.array(np.array([h[4] for h in HINGES], dtype=np.float32), dtype=float,
+                      device=args.device)
+        rest = wp.array(np.array([h[5] for h in HINGES], dtype=np.float32), dtype=float,
+                        device=args.device)
+
+    solver = newton.solvers.SolverSemiImplicit(model)
+    state, other = model.state(), model.state()
+    control = model.control()
+    h = DT / SUBSTEPS
+    # As many steps as nurbspring takes: T_END / DT, rounded when within 1e-9, else up.
+    r = T_END / DT
+    steps = int(round(r)) if abs(r - round(r)) <= 1e-9 * max(round(r), 1.0) else int(math.ceil(r))
+    rows = [[0.0] + [float(c) for p in PROBES for c in state.particle_q.numpy()[p]]]
+    for step in range(1, steps + 1):
+        for _ in range(SUBSTEPS):
+            state.clear_forces()
+            wp.launch(node_forces, dim=model.particle_count,
+                      inputs=[state.particle_qd, gamma, force], outputs=[state.particle_f],
+                      device=args.device)
+            if own_hinges:
+                wp.launch(hinge_forces, dim=len(HINGES), inputs=[state.particle_q, nodes, kw, rest],
+                          outputs=[state.particle_f], device=args.device)
+            solver.step(state, other, control, None, h)
+            state, other = other, state
+        if step % SAVE_EVERY == 0:
+            q = state.particle_q.numpy()
+            rows.append([step * DT] + [float(c) for p in PROBES for c in q[p]])
+    np.savetxt(args.out, np.array(rows), delimiter=",", header=HEADER, comments="",
+               fmt="%.9g")
+
+
+if __name__ == "__main__":
+    main()
+"#;
+
+/// Writes the Newton script of an MSM (atomically); returns what the script does differently
+/// from the model's own run, for a warning.
+pub fn write_msm_newton(path: &Path, setup: &MsmSetup, source: &str) -> Result<Vec<String>, Error> {
+    let file_name = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    );
+    let text = newton_script(setup, source, &file_name).map_err(|message| {
+        Error::option(
+            "--format",
+            "newton",
+            format!("{}: {message}", setup.path.display()),
+        )
+    })?;
+    write_atomic_bytes(path, text.as_bytes())?;
+    Ok(newton_plan(setup)
+        .map(|(_, notes)| notes)
+        .unwrap_or_default())
 }

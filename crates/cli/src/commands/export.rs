@@ -1,5 +1,5 @@
 //! `nurbspring export SCENE --format geomdl-json|iges|obj --out FILE` (the scene's geometry) and
-//! `nurbspring export msm.json --format sofa|npz --out FILE` (a mass-spring model).
+//! `nurbspring export msm.json --format sofa|newton|npz --out FILE` (a mass-spring model).
 
 use std::path::PathBuf;
 
@@ -8,7 +8,7 @@ use nurbspring_scene::Shape;
 use nurbspring_scene::geometry_file::{
     GeometryFormat, write_geometry_file, write_tessellated_curve_obj, write_tessellated_obj,
 };
-use nurbspring_scene::msm_export::{write_msm_npz, write_msm_sofa};
+use nurbspring_scene::msm_export::{write_msm_newton, write_msm_npz, write_msm_sofa};
 use nurbspring_scene::msm_file::{is_msm_file, load_msm};
 use nurbspring_scene::{Error, Scene};
 
@@ -28,12 +28,15 @@ pub enum ExportFormat {
     Sofa,
     /// A mass-spring model as a NumPy .npz archive (docs/export.md).
     Npz,
+    /// A mass-spring model as a Python script that builds and steps it in NVIDIA Newton (the
+    /// Warp-based engine; docs/export.md).
+    Newton,
 }
 
 /// Flags of `nurbspring export`.
 #[derive(Args, Debug)]
 pub struct ExportArgs {
-    /// Scene file (TOML); for sofa and npz also an msm.json written by `derive`.
+    /// Scene file (TOML); for sofa, newton and npz also an msm.json written by `derive`.
     input: PathBuf,
     /// Output format.
     #[arg(long, value_enum)]
@@ -62,7 +65,7 @@ pub fn run(_ctx: &Context, args: ExportArgs) -> CmdResult {
         ExportFormat::GeomdlJson => Some(GeometryFormat::GeomdlJson),
         ExportFormat::Iges => Some(GeometryFormat::Iges),
         ExportFormat::Obj => Some(GeometryFormat::ObjFreeForm),
-        ExportFormat::Sofa | ExportFormat::Npz => None,
+        ExportFormat::Sofa | ExportFormat::Npz | ExportFormat::Newton => None,
     };
     let what = match geometry_format {
         Some(format) => {
@@ -71,7 +74,7 @@ pub fn run(_ctx: &Context, args: ExportArgs) -> CmdResult {
                     "--format",
                     format!("{:?}", args.format).to_lowercase(),
                     format!(
-                        "exports a scene's geometry, but {} is an msm.json model (use --format sofa or npz)",
+                        "exports a scene's geometry, but {} is an msm.json model (use --format sofa, newton or npz)",
                         args.input.display()
                     ),
                 ));
@@ -109,14 +112,21 @@ pub fn run(_ctx: &Context, args: ExportArgs) -> CmdResult {
             let setup = load_msm(&args.input, &args.overrides.overrides(), &flag)?;
             let lattice = setup.model.lattice();
             let counts = format!(
-                "{} nodes, {} springs, {} linear elements",
+                "{} nodes, {} springs, {} hinges, {} linear elements",
                 lattice.n_nodes(),
                 lattice.springs.len(),
+                lattice.hinges.len(),
                 lattice.elements.len()
             );
             if args.format == ExportFormat::Npz {
                 write_msm_npz(&args.out, &setup)?;
                 format!("mass-spring model as NumPy arrays ({counts})")
+            } else if args.format == ExportFormat::Newton {
+                let source = args.input.display().to_string();
+                for note in write_msm_newton(&args.out, &setup, &source)? {
+                    eprintln!("warning: {note}");
+                }
+                format!("mass-spring model as a Newton script ({counts})")
             } else {
                 let source = args.input.display().to_string();
                 for limit in write_msm_sofa(&args.out, &setup, &source)? {
