@@ -264,7 +264,8 @@ fn every_derivation_carries_the_material_damping() {
     .replace("mu = 2.0", "mu = 2.0\ngamma = 0.4");
     let text = text.replace("t_end = 20.0", "t_end = 1.0");
     let s = Scene::from_str(&text, "damped.toml").unwrap();
-    for method in Method::ALL {
+    // Every derivation of the tension plate (the shell's, springs, has its own tests).
+    for method in Method::ALL.into_iter().filter(|m| !m.is_shell()) {
         let d = derive(&s, method);
         match (d.lattice(), d.reduction()) {
             (Some(l), _) => {
