@@ -36,7 +36,8 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, ShellMaterial};
-use nurbspring_geom::{GaussLegendre, NurbsSurface};
+pub(crate) use nurbspring_geom::norm;
+use nurbspring_geom::{GaussLegendre, NurbsSurface, area_element, cross};
 use nurbspring_linalg::{DenseMatrix, SparseMatrix, least_squares};
 use nurbspring_msm::{Class, Constants, HingeKind, LatticeOptions, SpringKind, SpringLattice};
 use serde::Serialize;
@@ -387,7 +388,7 @@ fn dual_areas(lattice: &SpringLattice, surface: &NurbsSurface) -> Result<Vec<f64
                             let u = wu[0] + hu * (xu + 1.0);
                             let v = wv[0] + hv * (xv + 1.0);
                             let d = surface.derivatives(u, v, 1)?;
-                            a += gu * gv * hu * hv * norm(cross(d.u, d.v));
+                            a += gu * gv * hu * hv * area_element(d.u, d.v);
                         }
                     }
                 }
@@ -647,18 +648,6 @@ pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
 fn norm2(a: [f64; 3]) -> f64 {
     a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
-}
-
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
-    norm2(a).sqrt()
 }

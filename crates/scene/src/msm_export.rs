@@ -250,15 +250,8 @@ pub struct SofaBending {
 /// assert!((sofa_bending_stiffness(&x, 2.0) - 3.0).abs() < 1e-15);
 /// ```
 pub fn sofa_bending_stiffness(x: &[[f64; 3]; 4], kw: f64) -> f64 {
+    use nurbspring_geom::{cross, norm};
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
     let e = sub(x[1], x[0]);
     let l = norm(e);
     let h_a = norm(cross(e, sub(x[2], x[0]))) / l;

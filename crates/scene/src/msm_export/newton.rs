@@ -10,15 +10,8 @@ use super::*;
 /// area times our gradient, the edge nodes mixing both), so with equal triangle areas it is
 /// ours when `edge_ke = k w / (|e| |N|)`; the mean of the two areas is used.
 pub fn newton_edge_ke(x: &[[f64; 3]; 4], kw: f64) -> f64 {
+    use nurbspring_geom::{cross, norm};
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
     let e = sub(x[1], x[0]);
     let n1 = norm(cross(e, sub(x[2], x[0])));
     let n2 = norm(cross(sub(x[3], x[0]), e));
