@@ -36,13 +36,13 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, ShellMaterial};
-pub(crate) use nurbspring_geom::norm;
+use nurbspring_geom::norm;
 use nurbspring_geom::{GaussLegendre, NurbsSurface, area_element, cross};
 use nurbspring_linalg::{DenseMatrix, SparseMatrix, least_squares};
 use nurbspring_msm::{Class, Constants, HingeKind, LatticeOptions, SpringKind, SpringLattice};
 use serde::Serialize;
 
-use crate::springs_check::{self, LargeMotion, SmallMotion};
+use crate::springs_check::{self, LargeMotion, SmallMotion, sub};
 use crate::{DeriveError, InitialConditions, TimeSettings, match_modes};
 
 /// The shell modes the calibration fits (fewer when the lattice or the shell has fewer).
@@ -211,7 +211,13 @@ pub fn derive_springs(
         )
     } else {
         (
-            Some(check.large_motion(&config.shell, &config.loads, &geometry, config)?),
+            Some(check.large_motion(
+                &config.shell,
+                &config.loads,
+                &geometry,
+                &config.constraints,
+                &config.dnurbs,
+            )?),
             None,
         )
     };
@@ -642,10 +648,6 @@ fn bounding_diagonal(x: &[[f64; 3]]) -> f64 {
         }
     }
     norm(sub(hi, lo))
-}
-
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 fn norm2(a: [f64; 3]) -> f64 {

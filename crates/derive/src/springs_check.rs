@@ -5,7 +5,10 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use nurbspring_dnurbs::{DnurbsModel, Geometry, Loads, PathSettings, ShellMaterial};
+use nurbspring_dnurbs::{
+    Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, PathSettings, ShellMaterial,
+};
+use nurbspring_geom::norm;
 use nurbspring_linalg::{
     DenseMatrix, LuSolver, SparseMatrix, SpdSolver, generalized_eigen_sparse_lowest,
     generalized_symmetric_eigen,
@@ -16,7 +19,6 @@ use nurbspring_sim::{
 };
 use serde::Serialize;
 
-use crate::springs::{SpringsConfig, norm, sub};
 use crate::{DeriveError, InitialConditions, compare_points};
 
 /// Time steps per period of the lowest mode in the validation runs.
@@ -432,7 +434,8 @@ impl Check<'_> {
         shell: &ShellMaterial,
         loads: &Loads,
         geometry: &Geometry,
-        config: &SpringsConfig,
+        constraints: &Constraints,
+        options: &DnurbsOptions,
     ) -> Result<LargeMotion, DeriveError> {
         let model = self.model;
         let rest = self.map.positions(model.p0());
@@ -450,8 +453,8 @@ impl Check<'_> {
                 geometry.clone(),
                 *shell,
                 loads.scaled(factor),
-                &config.constraints,
-                config.dnurbs.clone(),
+                constraints,
+                options.clone(),
             )
         };
         // The linear estimate of the factor (none for a mechanism), then the shell's answer.
@@ -620,6 +623,11 @@ impl Check<'_> {
         }
         out
     }
+}
+
+/// `a − b`.
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 /// Why a validation run stopped, in the report's words.
