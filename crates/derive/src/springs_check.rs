@@ -484,14 +484,14 @@ impl Check<'_> {
             dynamic_failure: None,
         };
         let mut attempt = 0;
-        let path = loop {
+        let (scaled, path) = loop {
             let scaled = build(factor)?;
             match scaled.equilibrium_path(&settings, &cancel, &mut |_| {}) {
                 Ok(path) => {
                     let d = largest(&path.levels.last().expect("levels ≥ 1").p);
                     attempt += 1;
                     if d >= LARGE_MOTION || attempt == 3 {
-                        break Some(path);
+                        break (scaled, Some(path));
                     }
                     factor *= 1.05 * LARGE_MOTION / d.max(1e-12);
                 }
@@ -500,12 +500,11 @@ impl Check<'_> {
                 }
                 Err(e) => {
                     out.static_failure = Some(format!("the shell's load path stopped: {e}"));
-                    break None;
+                    break (scaled, None);
                 }
             }
         };
         out.load_factor = factor;
-        let scaled = build(factor)?;
         let node_force = self
             .map
             .work_equivalent(scaled.reduced_force())

@@ -190,25 +190,13 @@ impl DnurbsModel {
             RestShape::Initial => p0.clone(),
             RestShape::Zero => vec![0.0; p0.len()],
         };
-        let stiffness_r = reduction.reduce_matrix(&matrices.stiffness)?;
-        let mass_r = SystemMatrix::Sparse(reduction.reduce_matrix(&matrices.mass)?);
-        let damping_r = if material.gamma > 0.0 {
-            Some(SystemMatrix::Sparse(
-                reduction.reduce_matrix(&matrices.damping)?,
-            ))
-        } else {
-            None
-        };
-        let diff: Vec<f64> = reduction
-            .offset
-            .iter()
-            .zip(&p_rest)
-            .map(|(o, r)| o - r)
-            .collect();
-        let mut k_diff = vec![0.0; diff.len()];
-        matrices.stiffness.mul_vec(&diff, &mut k_diff);
-        let f_int0 = reduction.reduce_vector(&k_diff);
-        let f_ext = reduction.reduce_vector(&matrices.force);
+        let ReducedSystem {
+            mass_r,
+            damping_r,
+            stiffness_r,
+            f_ext,
+            f_int0,
+        } = ReducedSystem::new(&reduction, &matrices, material.gamma, &p_rest)?;
         Ok(Self {
             geometry,
             material,
@@ -293,26 +281,14 @@ impl DnurbsModel {
         let mut matrices = assemble(&geometry, &material, &loads, &options)?;
         matrices.stiffness = energy.tangent(&p0);
         let edge_loads = EdgeLoads::new(&geometry, &loads.edges, quadrature.points)?;
-        let stiffness_r = reduction.reduce_matrix(&matrices.stiffness)?;
-        let mass_r = SystemMatrix::Sparse(reduction.reduce_matrix(&matrices.mass)?);
-        let damping_r = if material.gamma > 0.0 {
-            Some(SystemMatrix::Sparse(
-                reduction.reduce_matrix(&matrices.damping)?,
-            ))
-        } else {
-            None
-        };
-        let f_ext = reduction.reduce_vector(&matrices.force);
         // The linearization at rest: f_int(q) ≈ K_r q + Pᵀ K_T (o − p0).
-        let diff: Vec<f64> = reduction
-            .offset
-            .iter()
-            .zip(&p0)
-            .map(|(o, r)| o - r)
-            .collect();
-        let mut k_diff = vec![0.0; diff.len()];
-        matrices.stiffness.mul_vec(&diff, &mut k_diff);
-        let f_int0 = reduction.reduce_vector(&k_diff);
+        let ReducedSystem {
+            mass_r,
+            damping_r,
+            stiffness_r,
+            f_ext,
+            f_int0,
+        } = ReducedSystem::new(&reduction, &matrices, material.gamma, &p0)?;
         Ok(Self {
             geometry,
             material,
@@ -873,3 +849,46 @@ impl DynamicModel for DnurbsModel {
 
 #[cfg(test)]
 mod tests;
+
+/// The model's matrices and loads on its reduced coordinates: `M_r`, `D_r` (when γ > 0),
+/// `K_r`, the reduced load and `f_int0 = Pᵀ K (o − p_rest)`, the elastic force of the
+/// constraints' offset `o` (so that `f_int(q) = K_r q + f_int0`).
+struct ReducedSystem {
+    mass_r: SystemMatrix,
+    damping_r: Option<SystemMatrix>,
+    stiffness_r: SparseMatrix,
+    f_ext: Vec<f64>,
+    f_int0: Vec<f64>,
+}
+
+impl ReducedSystem {
+    fn new(
+        reduction: &Reduction,
+        matrices: &Matrices,
+        gamma: f64,
+        rest: &[f64],
+    ) -> Result<Self, DnurbsError> {
+        let damping_r = if gamma > 0.0 {
+            Some(SystemMatrix::Sparse(
+                reduction.reduce_matrix(&matrices.damping)?,
+            ))
+        } else {
+            None
+        };
+        let diff: Vec<f64> = reduction
+            .offset
+            .iter()
+            .zip(rest)
+            .map(|(o, r)| o - r)
+            .collect();
+        let mut k_diff = vec![0.0; diff.len()];
+        matrices.stiffness.mul_vec(&diff, &mut k_diff);
+        Ok(Self {
+            mass_r: SystemMatrix::Sparse(reduction.reduce_matrix(&matrices.mass)?),
+            damping_r,
+            stiffness_r: reduction.reduce_matrix(&matrices.stiffness)?,
+            f_ext: reduction.reduce_vector(&matrices.force),
+            f_int0: reduction.reduce_vector(&k_diff),
+        })
+    }
+}

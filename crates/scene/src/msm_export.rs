@@ -18,6 +18,23 @@ use crate::msm_file::MsmSetup;
 mod newton;
 pub use newton::{newton_edge_ke, newton_plan, newton_script, write_msm_newton};
 
+/// The rows `(a, b, k w, c, rest length)` of every spring of `lattice` as a Python list's body,
+/// closed by `]` (the SOFA and Newton scripts list springs alike).
+fn spring_rows(s: &mut String, lattice: &nurbspring_msm::SpringLattice) {
+    for sp in &lattice.springs {
+        let _ = writeln!(
+            s,
+            "    ({}, {}, {:?}, {:?}, {:?}),",
+            sp.a,
+            sp.b,
+            sp.stiffness(),
+            sp.damping,
+            sp.rest_length
+        );
+    }
+    s.push_str("]\n\n");
+}
+
 /// Node positions and velocities of the initial state, all nodes (fixed ones at rest).
 fn initial_nodes(setup: &MsmSetup) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
     let lattice = setup.model.lattice();
@@ -552,18 +569,7 @@ pub fn sofa_scene(setup: &MsmSetup, source: &str, file_name: &str) -> Result<Str
         s.push_str("FORCES = None\n\n");
     }
     s.push_str("# One spring per row: node a, node b, stiffness k, damping kd, rest length.\nSPRINGS = [\n");
-    for sp in &lattice.springs {
-        let _ = writeln!(
-            s,
-            "    ({}, {}, {:?}, {:?}, {:?}),",
-            sp.a,
-            sp.b,
-            sp.stiffness(),
-            sp.damping,
-            sp.rest_length
-        );
-    }
-    s.push_str("]\n\n");
+    spring_rows(&mut s, lattice);
     s.push_str(
         "# FastTriangularBendingSprings components: bendingStiffness and the triangles of their\n\
          # MeshTopology (the interior edges of each topology are its hinges).\nBENDING = [\n",

@@ -87,7 +87,8 @@ pub fn write_springs(
     write_lattice_obj(&out.join("lattice.obj"), &d.lattice)?;
     write_lattice_vtu(&out.join("lattice.vtu"), &d.lattice)?;
     write_json(out.join("report.json"), &SpringsReport::new(scene_label, d))?;
-    if let Some(l) = &d.large_motion {
+    // The load path's table and plot, when the static comparison has levels.
+    if let Some(l) = d.large_motion.as_ref().filter(|l| !l.levels.is_empty()) {
         write_csv(
             out.join("load_path.csv"),
             &[
@@ -121,9 +122,6 @@ pub fn write_springs(
                     .collect(),
             ),
         ];
-        if l.levels.is_empty() {
-            return write_markdown(out, scene_label, d);
-        }
         let options = PlotOptions::new(
             "Large motion: the spring model on the shell's load path",
             "load factor on the scene's loads",

@@ -145,18 +145,7 @@ pub fn newton_script(setup: &MsmSetup, source: &str, file_name: &str) -> Result<
     s.push_str(
         "# One spring per row: node a, node b, ke = k w, kd = c, rest length.\nSPRINGS = [\n",
     );
-    for sp in &lattice.springs {
-        let _ = writeln!(
-            s,
-            "    ({}, {}, {:?}, {:?}, {:?}),",
-            sp.a,
-            sp.b,
-            sp.stiffness(),
-            sp.damping,
-            sp.rest_length
-        );
-    }
-    s.push_str("]\n\n");
+    spring_rows(&mut s, lattice);
     s.push_str(
         "# One hinge per row: edge x0, x1, wing x2 of (x0, x1, x2), wing x3 of (x1, x0, x3),\n\
          # k w, rest angle theta0, Newton's edge_ke for --bending newton.\nHINGES = [\n",
