@@ -84,14 +84,15 @@ pub use outcome::{
     TrustRegionReport, Validation,
 };
 pub use pipeline::{
-    Judge, SelectedReading, derive_msm, evaluate, fit_step, mass_step, msm_spectrum, reference_run,
-    spectra,
+    Judge, MAX_SPECTRUM_DOFS, SCAN_BATCH, SelectedReading, derive_msm, evaluate, fit_step,
+    mass_step, msm_spectrum, reference_run, spectra,
 };
 pub use reference::ReferenceKind;
 pub use runner::{Recording, Watched, record, record_noted};
 pub use scalar::{EnergyOrigin, ScalarSystem};
 pub use setup::{
-    Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, Setup, TimeSettings,
+    Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, MassScan, Setup,
+    TimeSettings,
 };
 pub use springs::{
     CALIBRATION_ITERATIONS, ClassConstant, RIGID_FREQUENCY, RIGID_MODES, SPRING_CLASSES,

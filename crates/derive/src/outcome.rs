@@ -19,10 +19,20 @@ use crate::validation::ModalTruncation;
 pub struct MassCandidate {
     /// Node mass tried.
     pub m: f64,
-    /// RMS of the central node's z difference to the D-NURBS run (∞ when the MSM run failed).
+    /// RMS of the central node's z difference to the D-NURBS run (∞, and not written, when the
+    /// MSM run failed or was pruned).
+    #[serde(skip_serializing_if = "not_finite")]
     pub rms: f64,
-    /// Max abs of that difference.
+    /// Max abs of that difference (as `rms`).
+    #[serde(skip_serializing_if = "not_finite")]
     pub max_abs: f64,
+    /// A pruned candidate ([`crate::MassScan::Pruned`]): the time its run stopped, when the
+    /// running sum of its squared errors already exceeded the best complete candidate's total.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pruned_at: Option<f64>,
+    /// A pruned candidate's lower bound of its RMS over the whole run (above the best's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rms_at_least: Option<f64>,
     /// Integrator used for this candidate.
     pub integrator: IntegratorKind,
     /// Its steps per Δt (more than 1: an explicit scheme kept below its stability limit).
@@ -30,6 +40,11 @@ pub struct MassCandidate {
     /// Why the run stopped early, if it did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+}
+
+/// Serde's filter for a number that is not written (JSON has no infinity).
+fn not_finite(x: &f64) -> bool {
+    !x.is_finite()
 }
 
 /// The masses: how they were chosen, and their totals against the D-NURBS's.

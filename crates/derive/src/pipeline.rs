@@ -24,7 +24,7 @@ use crate::outcome::{
 };
 use crate::reference::{ReferenceKind, run_scalar, sample_times};
 use crate::runner::{Watched, record_noted};
-use crate::setup::{Config, FitMethod, FitOptions, MassChoice, Setup};
+use crate::setup::{Config, FitMethod, FitOptions, MassChoice, MassScan, Setup};
 use crate::validation::{Trajectory, compare};
 
 /// The reading of eq. (15) the derived MSM uses.
@@ -71,7 +71,7 @@ impl std::fmt::Display for SelectedReading {
 }
 
 /// Largest model whose full spectrum is reported (dense eigenproblems).
-const MAX_SPECTRUM_DOFS: usize = 1500;
+pub const MAX_SPECTRUM_DOFS: usize = 1500;
 
 /// Eigenvalues below this fraction of the largest count as zero frequencies.
 const ZERO_EIGENVALUE: f64 = 1e-12;
@@ -221,12 +221,20 @@ pub fn mass_step(
     })
 }
 
+/// Candidates of the eigenvalue scan run in batches of this many, in parallel within a batch.
+/// A pruned scan bounds each batch by the best complete candidate of the batches before it, so
+/// what is pruned, and every number reported, does not depend on the number of threads.
+pub const SCAN_BATCH: usize = 4;
+
 /// The candidate loop: simulates the MSM with `m = λ` for each candidate. Each run uses the
 /// scene's integrator, in substeps when it is explicit and Δt is above its stability limit
 /// (Newmark when that would take more than [`nurbspring_sim::MAX_SUBSTEPS`]; recorded per
 /// candidate, [`Setup::schedule`]).
-/// The candidates are independent, so they run in parallel (rayon's pool; the results do not
-/// depend on the order); `progress` is called on the calling thread as runs finish.
+///
+/// With [`MassScan::Pruned`] a run stops as soon as the running sum of its squared errors
+/// exceeds the best complete candidate's whole sum (the error sum only grows, so it could not
+/// be selected; docs/math.md §6). The candidates run in batches of [`SCAN_BATCH`] on rayon's
+/// pool; `progress` is called on the calling thread as runs finish.
 fn mass_candidates(
     setup: &Setup,
     config: &Config,
@@ -238,43 +246,74 @@ fn mass_candidates(
 ) -> Result<Vec<MassCandidate>, DeriveError> {
     use rayon::prelude::*;
     let z_ref = dnurbs.component(0, 2);
-    let run = |m: f64| -> Result<MassCandidate, DeriveError> {
+    let centre = setup.probe_nodes()[0];
+    let samples = z_ref.len();
+    // `bound`: the error sum beyond which the run stops (∞: it runs to the end).
+    let run = |m: f64, bound: f64| -> Result<MassCandidate, DeriveError> {
         if cancel.as_ref().is_some_and(|c| c.load(Ordering::Relaxed)) {
             return Err(DeriveError::Cancelled);
         }
         let (schedule, limit) =
             setup.schedule(constants, m, config.time.msm_integrator, config.time.dt)?;
-        let traj = setup.run_msm(
+        let mut sum = 0.0;
+        let (traj, pruned) = setup.run_msm_watched(
             setup.lattice_with(constants, m),
             (schedule, limit),
-            config.time.dt,
-            config.time.t_end,
-            false,
-            cancel.clone(),
+            (config.time.dt, config.time.t_end),
+            cancel.as_deref(),
+            &mut |step, x| {
+                if let Some(z) = z_ref.get(step) {
+                    let d = z - x[3 * centre + 2];
+                    sum += d * d;
+                }
+                sum <= bound || !sum.is_finite()
+            },
         )?;
-        let c = compare(&dnurbs.t, &z_ref, &traj.component(0, 2));
-        let complete = traj.stopped.is_none() && c.samples == z_ref.len();
-        Ok(MassCandidate {
+        let mut candidate = MassCandidate {
             m,
-            rms: if complete { c.rms } else { f64::INFINITY },
-            max_abs: if complete { c.max_abs } else { f64::INFINITY },
+            rms: f64::INFINITY,
+            max_abs: f64::INFINITY,
+            pruned_at: None,
+            rms_at_least: None,
             integrator: schedule.integrator,
             substeps: schedule.substeps,
             stopped: traj.stopped.clone(),
-        })
+        };
+        if pruned {
+            candidate.pruned_at = traj.t.last().copied();
+            candidate.rms_at_least = Some((sum / samples as f64).sqrt());
+            return Ok(candidate);
+        }
+        let c = compare(&dnurbs.t, &z_ref, &traj.component(0, 2));
+        if traj.stopped.is_none() && c.samples == samples {
+            (candidate.rms, candidate.max_abs) = (c.rms, c.max_abs);
+        }
+        Ok(candidate)
     };
+    let pruned = config.fit.scan == MassScan::Pruned;
     let (done_tx, done_rx) = std::sync::mpsc::channel::<()>();
     std::thread::scope(|scope| {
         let worker = scope.spawn(move || {
-            masses
-                .par_iter()
-                .map(|&m| {
-                    let candidate = run(m);
-                    // The receiver outlives the worker unless the caller panicked.
-                    let _ = done_tx.send(());
-                    candidate
-                })
-                .collect::<Result<Vec<_>, _>>()
+            let mut candidates: Vec<MassCandidate> = Vec::with_capacity(masses.len());
+            for batch in masses.chunks(SCAN_BATCH) {
+                // The best whole error sum so far, with a margin for its rounding as rms².
+                let bound = candidates
+                    .iter()
+                    .filter(|c| pruned && c.rms.is_finite())
+                    .map(|c| c.rms * c.rms * samples as f64 * (1.0 + 1e-9))
+                    .fold(f64::INFINITY, f64::min);
+                let done = batch
+                    .par_iter()
+                    .map(|&m| {
+                        let candidate = run(m, bound);
+                        // The receiver outlives the worker unless the caller panicked.
+                        let _ = done_tx.send(());
+                        candidate
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                candidates.extend(done);
+            }
+            Ok(candidates)
         });
         // The channel closes when the worker's sender is dropped, that is when it returns.
         for (k, ()) in done_rx.iter().enumerate() {

@@ -119,7 +119,15 @@ pub fn record_noted(
     initial: State,
     opts: &RunOptions,
 ) -> Result<Trajectory, DeriveError> {
-    let (mut traj, outcome) = record(watched, initial, opts, Recording::default(), &mut |_, _| {});
+    let (traj, outcome) = record(watched, initial, opts, Recording::default(), &mut |_, _| {});
+    noted(traj, outcome)
+}
+
+/// How [`record_noted`] ends a run that [`record`] returned.
+pub(crate) fn noted(
+    mut traj: Trajectory,
+    outcome: Result<RunSummary, DeriveError>,
+) -> Result<Trajectory, DeriveError> {
     match outcome {
         Ok(summary) if summary.cancelled => Err(DeriveError::Cancelled),
         Ok(_) => Ok(traj),

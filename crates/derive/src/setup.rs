@@ -3,7 +3,7 @@
 //! probes, and for the paper's derivation the two fit problems of eq. (15).
 
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use nurbspring_dnurbs::{Constraints, DnurbsModel, DnurbsOptions, Geometry, Loads, Material};
 use nurbspring_linalg::SparseMatrix;
@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use crate::fit::{FitDofs, FitResult, StiffnessFit};
 use crate::method::Method;
 use crate::omega::NodeState;
-use crate::runner::{Watched, record_noted};
+use crate::runner::{Recording, Watched, noted, record, record_noted};
 use crate::{DeriveError, Omega, Trajectory};
 
 /// How the stiffness fit is solved.
@@ -50,6 +50,20 @@ pub enum MassChoice {
     Fixed(f64),
 }
 
+/// How far each candidate of the eigenvalue scan is run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MassScan {
+    /// A candidate stops as soon as its error's running sum of squares shows that its RMS
+    /// over the whole run exceeds the best complete candidate's of the batches before it: the
+    /// selected mass is the same as with [`MassScan::Complete`], the stopped candidates report
+    /// a lower bound of their RMS (docs/math.md §6).
+    #[default]
+    Pruned,
+    /// Every candidate runs to the end (its whole RMS is reported).
+    Complete,
+}
+
 /// Options of the fit and mass steps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitOptions {
@@ -63,6 +77,8 @@ pub struct FitOptions {
     pub mass: MassChoice,
     /// Try at most this many eigenvalues, smallest first (0 = all).
     pub max_candidates: usize,
+    /// Whether a candidate that can no longer win stops early.
+    pub scan: MassScan,
 }
 
 impl Default for FitOptions {
@@ -73,6 +89,7 @@ impl Default for FitOptions {
             method: FitMethod::ClosedForm,
             mass: MassChoice::EigenvalueScan,
             max_candidates: 0,
+            scan: MassScan::Pruned,
         }
     }
 }
@@ -433,6 +450,57 @@ impl Setup {
         self.run_msm_from(lattice, &self.nodes, &opts)
     }
 
+    /// [`Setup::run_msm`] (not forced above a stability limit) with `watch(step, coordinates
+    /// of every node)` called on each step of Δt, step 0 included: when it returns `false` the
+    /// run ends there, and the trajectory so far is returned with `true`. A cancellation by
+    /// `cancel` is [`DeriveError::Cancelled`].
+    pub fn run_msm_watched(
+        &self,
+        lattice: SpringLattice,
+        (schedule, stability): (Schedule, Option<StabilityLimit>),
+        (dt, t_end): (f64, f64),
+        cancel: Option<&AtomicBool>,
+        watch: &mut dyn FnMut(usize, &[f64]) -> bool,
+    ) -> Result<(Trajectory, bool), DeriveError> {
+        let stop = Arc::new(AtomicBool::new(false));
+        let mut opts = RunOptions::scheduled(dt, t_end, schedule, stability);
+        opts.cancel = Some(stop.clone());
+        let (model, initial) = self.msm_start(lattice, &self.nodes)?;
+        let watched = Watched::Msm {
+            model: &model,
+            nodes: &self.probe_nodes,
+        };
+        let mut ended = false;
+        let (traj, outcome) = record(
+            watched,
+            initial,
+            &opts,
+            Recording::default(),
+            &mut |sample, x| {
+                let cancelled = cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+                ended = ended || (!cancelled && !watch(sample.step, x));
+                if cancelled || ended {
+                    stop.store(true, Ordering::Relaxed);
+                }
+            },
+        );
+        if ended && matches!(&outcome, Ok(summary) if summary.cancelled) {
+            return Ok((traj, true));
+        }
+        noted(traj, outcome).map(|traj| (traj, false))
+    }
+
+    /// An MSM of `lattice` and its state at t = 0 from the node state `nodes`.
+    fn msm_start(
+        &self,
+        lattice: SpringLattice,
+        nodes: &NodeState,
+    ) -> Result<(MsmModel, State), DeriveError> {
+        let model = MsmModel::new(lattice)?;
+        let initial = model.initial_state_displaced(&nodes.velocities, &nodes.displacements);
+        Ok((model, initial))
+    }
+
     /// Runs an MSM on this setup's lattice from the node state `nodes`, recording the probe
     /// nodes.
     pub fn run_msm_from(
@@ -441,8 +509,7 @@ impl Setup {
         nodes: &NodeState,
         opts: &RunOptions,
     ) -> Result<Trajectory, DeriveError> {
-        let model = MsmModel::new(lattice)?;
-        let initial = model.initial_state_displaced(&nodes.velocities, &nodes.displacements);
+        let (model, initial) = self.msm_start(lattice, nodes)?;
         let watched = Watched::Msm {
             model: &model,
             nodes: &self.probe_nodes,

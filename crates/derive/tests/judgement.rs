@@ -5,8 +5,9 @@
 //! their thresholds, and the excitation fit's calibration, step limits and modal shares.
 
 use nurbspring_derive::{
-    Config, Derivation, DnurbsModes, FitDofs, FitOptions, InitialConditions, Method, PERIODS,
-    Setup, TimeSettings, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, derive, derive_msm,
+    Config, Derivation, DnurbsModes, FitDofs, FitOptions, InitialConditions, MassScan, Method,
+    PERIODS, Setup, TimeSettings, WARN_FREQUENCY, WARN_MASS_FACTOR, WARN_RELATIVE_RMS, derive,
+    derive_msm,
 };
 use nurbspring_dnurbs::{Constraints, DnurbsOptions, Geometry, Integration, Loads, Material};
 use nurbspring_geom::{KnotVector, NurbsSurface};
@@ -503,6 +504,41 @@ fn the_paper_derivation_reports_its_own_numbers() {
         "{:?}",
         f.warnings
     );
+    // The pruned scan (the default) selects what the complete scan selects: a candidate it
+    // stopped had, over its whole run, an RMS above the best, and above its reported bound.
+    assert_eq!(config.fit.scan, MassScan::Pruned);
+    let mut complete = config.clone();
+    complete.fit.scan = MassScan::Complete;
+    let (c, _) = derive_msm(&complete, None, &mut |_, _| {}).unwrap();
+    assert_eq!(c.mass.selected, d.mass.selected);
+    let best = c
+        .mass
+        .candidates
+        .iter()
+        .map(|c| c.rms)
+        .fold(f64::INFINITY, f64::min);
+    let mut pruned = 0;
+    for (p, w) in d.mass.candidates.iter().zip(&c.mass.candidates) {
+        assert_eq!(p.m, w.m);
+        assert!(w.pruned_at.is_none() && w.rms.is_finite());
+        match (p.pruned_at, p.rms_at_least) {
+            (Some(t), Some(bound)) => {
+                pruned += 1;
+                assert!(!p.rms.is_finite() && t < config.time.t_end, "{p:?}");
+                assert!(
+                    bound > best && bound <= w.rms * (1.0 + 1e-12),
+                    "{p:?} {w:?}"
+                );
+            }
+            _ => assert_eq!(p.rms, w.rms, "{p:?} {w:?}"),
+        }
+    }
+    // Candidates after the first batch whose RMS is well above the best are pruned.
+    let above = c.mass.candidates[nurbspring_derive::SCAN_BATCH..]
+        .iter()
+        .filter(|w| w.rms > 1.01 * best)
+        .count();
+    assert!(above > 0 && pruned >= above, "{pruned} of {above}");
     // The mass scan reports its progress once per candidate, in order.
     let mut calls = Vec::new();
     derive_msm(&config, None, &mut |k, n| calls.push((k, n))).unwrap();

@@ -391,6 +391,7 @@ impl Scene {
                     MassMethod::Fixed => MassChoice::Fixed(self.msm.mass_or_placeholder()),
                 },
                 max_candidates: fit.max_candidates,
+                scan: fit.mass_scan,
             },
             probes: self.probe_params()?,
             // The scene's own constants are evaluated beside the derived ones only when it

@@ -303,14 +303,26 @@ fn paper_sections(s: &mut String, d: &Derivation, fit: &FitReport) {
             "| m | RMS | max abs | integrator | note |\n|---|---|---|---|---|"
         );
         for c in &d.mass.candidates {
+            let number = |x: f64| {
+                if x.is_finite() {
+                    format!("{x:.4e}")
+                } else {
+                    "–".to_string()
+                }
+            };
+            let (rms, note) = match (c.rms_at_least, c.pruned_at) {
+                (Some(bound), Some(t)) => (
+                    format!("≥ {bound:.4e}"),
+                    format!("stopped at t = {t}: above the best already"),
+                ),
+                _ => (number(c.rms), c.stopped.clone().unwrap_or_default()),
+            };
             let _ = writeln!(
                 s,
-                "| {:.6} | {:.4e} | {:.4e} | {} | {} |",
+                "| {:.6} | {rms} | {} | {} | {note} |",
                 c.m,
-                c.rms,
-                c.max_abs,
+                number(c.max_abs),
                 c.integrator,
-                c.stopped.as_deref().unwrap_or("")
             );
         }
     }

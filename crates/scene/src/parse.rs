@@ -138,6 +138,7 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
             "method",
             "mass",
             "max_candidates",
+            "mass_scan",
         ],
     ),
     ("output", &["vtk_every"]),

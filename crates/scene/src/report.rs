@@ -556,7 +556,20 @@ fn write_plots(
         .filter(|c| c.rms.is_finite() && c.rms > 0.0)
         .map(|c| (c.m, c.rms))
         .collect();
+    let pruned: Vec<(f64, f64)> = d
+        .mass
+        .candidates
+        .iter()
+        .filter_map(|c| c.rms_at_least.map(|bound| (c.m, bound)))
+        .filter(|&(_, bound)| bound.is_finite() && bound > 0.0)
+        .collect();
     let mut scan_series = vec![Series::points("candidates", scan.clone())];
+    if !pruned.is_empty() {
+        scan_series.push(Series::points(
+            "stopped early: lower bound of the RMS",
+            pruned,
+        ));
+    }
     if let Some(chosen) = selected_point(&scan, d.mass.selected) {
         scan_series.push(Series::points(
             format!("selected m = {:.6}", d.mass.selected),
@@ -580,6 +593,16 @@ fn write_plots(
         )
     } else {
         format!("Angular frequencies of {scene_label}: D-NURBS vs MSM (at rest)")
+    };
+    // A model above the dense eigen-solve's size has no spectrum: it is named in the title
+    // rather than left as an empty legend entry.
+    let spectrum_title = if d.spectrum.msm.is_empty() {
+        format!(
+            "{spectrum_title}; MSM not computed (over {} dofs)",
+            nurbspring_derive::MAX_SPECTRUM_DOFS
+        )
+    } else {
+        spectrum_title
     };
     let shown = |v: &[f64]| v[..v.len().min(SPECTRUM_SHOWN)].to_vec();
     let (spectrum_dnurbs, spectrum_msm) = (shown(&d.spectrum.dnurbs), shown(&d.spectrum.msm));
@@ -638,7 +661,13 @@ fn write_plots(
                     out.join(format!("spectrum.{ext}")),
                     spectrum_title,
                     "omega [rad/s]",
-                    &[("D-NURBS", spectrum_dnurbs), (msm_name, spectrum_msm)],
+                    &[
+                        ("D-NURBS", spectrum_dnurbs.as_slice()),
+                        (msm_name.as_str(), spectrum_msm.as_slice()),
+                    ]
+                    .into_iter()
+                    .filter(|(_, values)| !values.is_empty())
+                    .collect::<Vec<_>>(),
                 )?;
                 Ok(())
             }));

@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use nurbspring_derive::{FitDofs, FitMethod, Method};
+use nurbspring_derive::{FitDofs, FitMethod, MassScan, Method};
 use nurbspring_dnurbs::{DnurbsOptions, Edge, MaterialModel};
 use nurbspring_msm::{LinearKind, ParameterGrid};
 use nurbspring_sim::IntegratorKind;
@@ -590,6 +590,8 @@ pub struct FitSpec {
     pub mass: MassMethod,
     /// Candidate masses tried (0 = every distinct eigenvalue).
     pub max_candidates: usize,
+    /// Whether a candidate that can no longer be selected stops early.
+    pub mass_scan: MassScan,
 }
 
 impl FitSpec {

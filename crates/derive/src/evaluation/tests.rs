@@ -435,6 +435,8 @@ fn candidate(m: f64) -> crate::outcome::MassCandidate {
         integrator: nurbspring_sim::IntegratorKind::Newmark,
         substeps: 1,
         stopped: None,
+        pruned_at: None,
+        rms_at_least: None,
     }
 }
 
