@@ -100,12 +100,16 @@ pub struct SpringFrequency {
     /// Its angular frequency [rad/s].
     pub shell: f64,
     /// The matched spring-model mode (1-based), if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub msm_mode: Option<usize>,
     /// Its angular frequency [rad/s].
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub msm: Option<f64>,
     /// MAC of the match.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub mac: Option<f64>,
     /// `(ω_msm − ω_shell) / ω_shell`.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub relative_error: Option<f64>,
 }
 
@@ -152,8 +156,10 @@ pub struct SpringsDerivation {
     /// The small-motion run.
     pub small_motion: SmallMotion,
     /// The large-motion runs (`None` when the scene has no loads to scale).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub large_motion: Option<LargeMotion>,
     /// Why there is no large-motion run, when there is none.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub large_motion_skipped: Option<String>,
     /// The one-line verdict.
     pub verdict: String,

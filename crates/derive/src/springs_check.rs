@@ -247,16 +247,21 @@ pub struct LargeMotion {
     /// The largest load factor on the scene's loads.
     pub load_factor: f64,
     /// The shell's largest node displacement at that factor on the static path, over the size.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub largest_displacement: Option<f64>,
     /// The static load path.
     pub levels: Vec<LoadLevelError>,
     /// Largest `max_error` over the levels.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub static_error: Option<f64>,
     /// Why the static path stopped, when it did.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub static_failure: Option<String>,
     /// The step load at the largest factor from rest.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub dynamic: Option<DynamicRun>,
     /// Why the dynamic run stopped, when it did.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub dynamic_failure: Option<String>,
 }
 
