@@ -47,6 +47,7 @@ mod parse;
 pub mod report;
 pub mod resources;
 pub mod run;
+pub mod runtime;
 mod scene;
 mod scene_error;
 pub mod spec;

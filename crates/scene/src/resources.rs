@@ -269,18 +269,18 @@ pub fn format_bytes(b: u64) -> String {
 }
 
 /// Sizes of the scene that set the estimates.
-struct Sizes {
+pub(crate) struct Sizes {
     /// Control points along u and v (v = 1 on a curve).
-    n_u: f64,
-    n_v: f64,
+    pub(crate) n_u: f64,
+    pub(crate) n_v: f64,
     /// Degrees (q = 0 on a curve).
-    p: f64,
-    q: f64,
+    pub(crate) p: f64,
+    pub(crate) q: f64,
     /// Dofs per control point.
-    d: f64,
+    pub(crate) d: f64,
     /// Non-empty knot spans along u and v (v = 1 on a curve).
-    spans_u: f64,
-    spans_v: f64,
+    pub(crate) spans_u: f64,
+    pub(crate) spans_v: f64,
 }
 
 /// Distinct values in a knot vector.
@@ -295,7 +295,7 @@ fn distinct(k: &[f64]) -> f64 {
 }
 
 impl Scene {
-    fn sizes(&self) -> Sizes {
+    pub(crate) fn sizes(&self) -> Sizes {
         let d = if self.dnurbs.weights_as_dofs {
             4.0
         } else {
@@ -325,7 +325,7 @@ impl Scene {
 
     /// Lattice nodes along u and v for `method`'s default grid (or the scene's), from the
     /// scene's numbers alone.
-    fn lattice_nodes(&self, method: Method) -> (f64, f64) {
+    pub(crate) fn lattice_nodes(&self, method: Method) -> (f64, f64) {
         let grid = self.msm.grid_for(method);
         match (&self.geometry, grid) {
             (GeometrySpec::Surface(s), LatticeGrid::Knots) => {

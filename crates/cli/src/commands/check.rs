@@ -30,6 +30,7 @@ pub fn run(ctx: &Context, args: CheckArgs) -> CmdResult {
     let mut value = serde_json::to_value(&report).unwrap_or_default();
     if let serde_json::Value::Object(map) = &mut value {
         map.insert("resources".to_string(), resources);
+        map.insert("derive_time".to_string(), scene.runtime_json());
     }
     if args.json {
         return print_json(&value);
