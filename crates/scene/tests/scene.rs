@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use nurbspring_derive::{FitDofs, FitMethod, Method};
+use nurbspring_derive::{FitDofs, FitMethod, MassScan, Method};
 use nurbspring_dnurbs::{DnurbsOptions, Integration, Material, RestShape};
 use nurbspring_scene::*;
 use nurbspring_sim::IntegratorKind;
@@ -1033,6 +1033,11 @@ fn scene() -> impl Strategy<Value = Scene> {
                         MassMethod::EigenvalueScan
                     },
                     max_candidates: fit,
+                    mass_scan: if nonneg {
+                        MassScan::Complete
+                    } else {
+                        MassScan::Pruned
+                    },
                 },
                 output: OutputSpec {
                     vtk_every: Some(save_every),
