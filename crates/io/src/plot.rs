@@ -3,8 +3,9 @@
 //! lookup, so figures look the same on every machine).
 //!
 //! Used for central-node trajectories and energies ([`plot_series`]), the mass-candidate scan
-//! (log-scale y, [`PlotOptions::log_y`]) and modal spectra ([`plot_spectrum`]). Points with a
-//! non-finite coordinate (and, on a log axis, non-positive y) are skipped, counted in
+//! (log-scale axes, [`PlotOptions::log_x`] and [`PlotOptions::log_y`]) and modal spectra
+//! ([`plot_spectrum`]). Points with a non-finite coordinate (and, on a log axis, a non-positive
+//! one) are skipped, counted in
 //! [`PlotSummary`] and mentioned in the caption, so a diverged run still gives a figure.
 //!
 //! ```
@@ -21,7 +22,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use plotters::coord::Shift;
-use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 
 use crate::OutputError;
@@ -79,6 +80,8 @@ pub struct PlotOptions {
     pub x_label: String,
     /// y axis label.
     pub y_label: String,
+    /// Logarithmic x axis (non-positive x values are skipped).
+    pub log_x: bool,
     /// Logarithmic y axis (non-positive y values are skipped).
     pub log_y: bool,
     /// x values are whole numbers (mode numbers): ticks at integers only.
@@ -100,6 +103,7 @@ impl PlotOptions {
             title: title.into(),
             x_label: x_label.into(),
             y_label: y_label.into(),
+            log_x: false,
             log_y: false,
             integer_x: false,
             width: 1024,
@@ -243,7 +247,12 @@ pub fn plot_series_with(
                 .points
                 .iter()
                 .copied()
-                .filter(|&(x, y)| x.is_finite() && y.is_finite() && (!options.log_y || y > 0.0))
+                .filter(|&(x, y)| {
+                    x.is_finite()
+                        && y.is_finite()
+                        && (!options.log_x || x > 0.0)
+                        && (!options.log_y || y > 0.0)
+                })
                 .collect();
             summary.drawn += points.len();
             summary.skipped += s.points.len() - points.len();
@@ -255,7 +264,7 @@ pub fn plot_series_with(
         })
         .collect();
     let caption = if summary.skipped > 0 {
-        let what = if options.log_y {
+        let what = if options.log_x || options.log_y {
             "non-finite or non-positive"
         } else {
             "non-finite"
@@ -403,11 +412,15 @@ fn log_range(values: impl Iterator<Item = f64>) -> Range<f64> {
 
 /// The corner of the plot area covering the fewest data points, how many it covers there, and
 /// the fraction of the plot's height the legend box takes.
-fn legend_place(series: &[Series], log_y: bool) -> (SeriesLabelPosition, usize, f64) {
-    let ty = |y: f64| if log_y { y.log10() } else { y };
+fn legend_place(series: &[Series], options: &PlotOptions) -> (SeriesLabelPosition, usize, f64) {
+    let scaled = |v: f64, log: bool| if log { v.log10() } else { v };
     let pts: Vec<(f64, f64)> = series
         .iter()
-        .flat_map(|s| s.points.iter().map(|&(x, y)| (x, ty(y))))
+        .flat_map(|s| {
+            s.points
+                .iter()
+                .map(|&(x, y)| (scaled(x, options.log_x), scaled(y, options.log_y)))
+        })
         .collect();
     let x = linear_range(pts.iter().map(|p| p.0));
     let y = linear_range(pts.iter().map(|p| p.1));
@@ -492,10 +505,10 @@ fn draw<DB: DrawingBackend>(
     px: u32,
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let x_range = linear_range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
+    let x_values = || series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
     let y_values = || series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
     // Room above the data for the legend when every corner would cover some of it.
-    let (_, covered, height) = legend_place(series, options.log_y);
+    let (_, covered, height) = legend_place(series, options);
     let headroom = if covered > 0 && !series.is_empty() {
         height / (1.0 - height)
     } else {
@@ -509,34 +522,53 @@ fn draw<DB: DrawingBackend>(
         .margin(16 * px)
         .x_label_area_size(48 * px)
         .y_label_area_size(80 * px);
-    if options.log_y {
+    let x = if options.log_x {
+        log_range(x_values())
+    } else {
+        linear_range(x_values())
+    };
+    let y = if options.log_y {
         let r = log_range(y_values());
         let top = r.end * (r.end / r.start).powf(headroom);
-        let top = if top.is_finite() { top } else { r.end };
-        let chart = builder
-            .build_cartesian_2d(x_range, (r.start..top).log_scale())
-            .map_err(|e| e.to_string())?;
-        fill_chart(chart, options, series, px)
+        r.start..if top.is_finite() { top } else { r.end }
     } else {
         let r = linear_range(y_values());
         let top = r.end + headroom * (r.end - r.start);
-        let top = if top.is_finite() { top } else { r.end };
-        let chart = builder
-            .build_cartesian_2d(x_range, r.start..top)
-            .map_err(|e| e.to_string())?;
-        fill_chart(chart, options, series, px)
+        r.start..if top.is_finite() { top } else { r.end }
+    };
+    let fail = |e: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    match (options.log_x, options.log_y) {
+        (false, false) => {
+            let chart = builder.build_cartesian_2d(x, y).map_err(fail)?;
+            fill_chart(chart, options, series, px)
+        }
+        (false, true) => {
+            let chart = builder.build_cartesian_2d(x, y.log_scale()).map_err(fail)?;
+            fill_chart(chart, options, series, px)
+        }
+        (true, false) => {
+            let chart = builder.build_cartesian_2d(x.log_scale(), y).map_err(fail)?;
+            fill_chart(chart, options, series, px)
+        }
+        (true, true) => {
+            let chart = builder
+                .build_cartesian_2d(x.log_scale(), y.log_scale())
+                .map_err(fail)?;
+            fill_chart(chart, options, series, px)
+        }
     }
 }
 
-/// Mesh, series and legend, for either y scale.
-fn fill_chart<'a, DB, Y>(
-    mut chart: ChartContext<'a, DB, Cartesian2d<<Range<f64> as AsRangedCoord>::CoordDescType, Y>>,
+/// Mesh, series and legend, for either scale of each axis.
+fn fill_chart<'a, DB, X, Y>(
+    mut chart: ChartContext<'a, DB, Cartesian2d<X, Y>>,
     options: &PlotOptions,
     series: &[Series],
     px: u32,
 ) -> Result<(), String>
 where
     DB: DrawingBackend + 'a,
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
     Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
 {
     let x_span = chart.x_range();
@@ -548,8 +580,12 @@ where
             .x_label_formatter(&integer_label);
     }
     let (d, t) = (px as i32, px);
+    // Enough labels on a log axis that every decade in view, and the values between, are
+    // named.
+    if options.log_x {
+        mesh.x_labels(16).x_label_formatter(&log_label);
+    }
     if options.log_y {
-        // Enough labels that every decade in view, and the values between, are named.
         mesh.y_labels(16).y_label_formatter(&log_label);
     }
     mesh.x_desc(options.x_label.as_str())
@@ -634,7 +670,7 @@ where
             .margin(5 * t)
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK.stroke_width(t))
-            .position(match legend_place(series, options.log_y) {
+            .position(match legend_place(series, options) {
                 // `draw` left room above the data for the legend.
                 (_, covered, _) if covered > 0 => SeriesLabelPosition::UpperRight,
                 (corner, _, _) => corner,

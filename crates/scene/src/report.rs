@@ -209,9 +209,10 @@ fn plot(
     x_label: &str,
     y_label: &str,
     series: &[Series],
-    log_y: bool,
+    (log_x, log_y): (bool, bool),
 ) -> Result<(), Error> {
     let mut options = PlotOptions::new(title, x_label, y_label);
+    options.log_x = log_x;
     options.log_y = log_y;
     plot_series_with(path, &options, series)?;
     Ok(())
@@ -618,7 +619,7 @@ fn write_plots(
                 "t [s]",
                 y_label,
                 central,
-                false,
+                (false, false),
             )
         }));
     }
@@ -632,7 +633,7 @@ fn write_plots(
                     "node mass m [kg] (an eigenvalue of M)",
                     "RMS error [m]",
                     scan_series,
-                    true,
+                    (true, true),
                 )
             }));
         }
@@ -647,7 +648,7 @@ fn write_plots(
                     "t [s]",
                     "energy / largest kinetic + elastic energy of the model",
                     energy,
-                    false,
+                    (false, false),
                 )
             }));
         }
