@@ -139,6 +139,20 @@ fn log_scale_mass_scan() {
     }
     let svg = std::fs::read_to_string(dir.join("mass_scan.svg")).unwrap();
     assert!(svg.contains("non-finite or non-positive"));
+    // On log axes both ways (masses over decades): a non-positive mass is skipped too, and
+    // each decade of x is labelled.
+    let over_decades: Vec<(f64, f64)> = (0..=12)
+        .map(|k| (1e-6 * 10f64.powf(k as f64 / 4.0), 0.01 + 1e-3 * k as f64))
+        .chain([(0.0, 0.02), (-1e-5, 0.02)])
+        .collect();
+    opts.log_x = true;
+    let p = dir.join("both.svg");
+    let s = plot_series_with(&p, &opts, &[Series::points("RMS", over_decades)]).unwrap();
+    assert_eq!((s.drawn, s.skipped), (13, 2));
+    let texts = svg_texts(&std::fs::read_to_string(&p).unwrap());
+    for label in ["1.0e-5", "1.0e-4", "0.0010"] {
+        assert!(texts.iter().any(|t| t == label), "{label} not in {texts:?}");
+    }
 }
 
 #[test]
