@@ -83,8 +83,10 @@ pub struct ProbeError {
     /// The lattice node.
     pub node: usize,
     /// `RMS_t |x_MSM − x_DN| / max_t |x_DN − x_DN(0)|`.
+    #[serde(skip_serializing_if = "not_finite")]
     pub relative_rms: f64,
     /// `RMS_t |x_MSM − x_DN|`.
+    #[serde(skip_serializing_if = "not_finite")]
     pub rms: f64,
 }
 
@@ -103,18 +105,25 @@ pub struct Validation {
     /// Sampling step [s].
     pub dt: f64,
     /// `RMS_t |x_MSM − x_DN|` of the central node.
+    #[serde(skip_serializing_if = "not_finite")]
     pub rms: f64,
     /// `max_t |x_MSM − x_DN|`.
+    #[serde(skip_serializing_if = "not_finite")]
     pub max_abs: f64,
     /// `rms / max_t |x_DN − x_DN(0)|`.
+    #[serde(skip_serializing_if = "not_finite")]
     pub relative_rms: f64,
     /// The same on the z coordinate alone (the paper's Figure 3 reading).
+    #[serde(skip_serializing_if = "not_finite")]
     pub relative_rms_z: f64,
     /// `max_t |x_DN − x_DN(0)|`.
+    #[serde(skip_serializing_if = "not_finite")]
     pub dnurbs_amplitude: f64,
     /// Dominant period of the D-NURBS central node.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub dnurbs_period: Option<f64>,
     /// Dominant period of the MSM central node.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub msm_period: Option<f64>,
     /// Samples compared.
     pub samples: usize,
