@@ -4,6 +4,9 @@ use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
 
+mod support;
+use support::null_in;
+
 fn bin() -> Command {
     let mut c = Command::cargo_bin("nurbspring").unwrap();
     c.arg("--quiet");
@@ -109,21 +112,6 @@ fn every_example_checks() {
             .unwrap();
     assert!(report["paper_parameters"]["explicit_run"]["msm_stopped"].is_string());
     assert_eq!(null_in(&report, "report"), None);
-}
-
-/// The path of the first null in `v`, if any.
-fn null_in(v: &serde_json::Value, path: &str) -> Option<String> {
-    match v {
-        serde_json::Value::Null => Some(path.to_string()),
-        serde_json::Value::Array(items) => items
-            .iter()
-            .enumerate()
-            .find_map(|(i, x)| null_in(x, &format!("{path}[{i}]"))),
-        serde_json::Value::Object(map) => map
-            .iter()
-            .find_map(|(k, x)| null_in(x, &format!("{path}.{k}"))),
-        _ => None,
-    }
 }
 
 /// `eval` at the paper's centre: the printed net gives z = 2 and the point lies in the sheet.

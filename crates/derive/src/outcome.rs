@@ -210,6 +210,7 @@ pub struct FrequencyRow {
     pub relative_difference: f64,
     /// MAC of the two shapes at the free nodes (none when the MSM's modes are not the
     /// isotropic triplets of a linear model).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub mac: Option<f64>,
 }
 

@@ -208,8 +208,10 @@ pub struct DynamicsReading {
     /// D-NURBS amplitude of the central node in z.
     pub dnurbs_amplitude: f64,
     /// D-NURBS period.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub dnurbs_period: Option<f64>,
     /// MSM period.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub msm_period: Option<f64>,
     /// Largest in-plane drift of the D-NURBS central point, `max |(x, y) − (x₀, y₀)|`.
     pub dnurbs_in_plane_drift: f64,

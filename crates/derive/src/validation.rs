@@ -28,6 +28,7 @@ pub struct Trajectory {
     /// load, `external` is the load's potential; their sum is the total energy.
     pub energy: Vec<[f64; 3]>,
     /// Set when the run stopped early (diverged, unstable or cancelled), with the reason.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
     /// Steps of an implicit integrator taken in halves after Newton failed on them.
     pub halved_steps: usize,
@@ -89,8 +90,10 @@ pub struct Comparison {
     /// `rms / reference_amplitude`.
     pub relative_rms: f64,
     /// Dominant period of the reference (mean spacing of its upward mean crossings).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub reference_period: Option<f64>,
     /// Dominant period of the other series.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub other_period: Option<f64>,
 }
 

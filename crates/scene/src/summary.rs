@@ -79,6 +79,7 @@ pub struct MsmSummary {
     /// Nodes.
     pub nodes: usize,
     /// `[n_u, n_v]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub grid: Option<(usize, usize)>,
     /// Fixed nodes.
     pub fixed_nodes: usize,
