@@ -664,7 +664,7 @@ fn derive_springs<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     use nurbspring_scene::springs_report::{SpringsReport, springs_msm_file};
     let d = run_blocking(py, |cancel| {
-        nurbspring_scene::springs_report::derive_springs(scene, Some(cancel))
+        nurbspring_scene::springs_report::derive_springs(scene, Some(cancel), &mut |_| {})
     })?
     .map_err(py_err)?;
     let label = scene.path.display().to_string();

@@ -14,6 +14,8 @@ pub const LINE_EVERY: Duration = Duration::from_secs(10);
 /// The line printer of a run without a terminal: a thread that wakes every second and writes
 /// `what: done/total (elapsed)` when [`LINE_EVERY`] has passed since the last line.
 struct Lines {
+    /// What is running (the label of each line).
+    what: Arc<Mutex<String>>,
     stop: Arc<AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
     done: Arc<AtomicU64>,
@@ -22,6 +24,8 @@ struct Lines {
 
 impl Lines {
     fn start(what: String, total: u64) -> Self {
+        let what = Arc::new(Mutex::new(what));
+        let label = what.clone();
         let stop = Arc::new(AtomicBool::new(false));
         let done = Arc::new(AtomicU64::new(0));
         let total = Arc::new(AtomicU64::new(total));
@@ -38,26 +42,14 @@ impl Lines {
                         *l = Instant::now();
                         let (d, t) = (d.load(Ordering::Relaxed), t.load(Ordering::Relaxed));
                         let secs = start.elapsed().as_secs();
-                        let label = if what.is_empty() {
-                            "running"
-                        } else {
-                            what.as_str()
-                        };
-                        if t > 1 {
-                            let eta = if d > 0 && d < t {
-                                format!(", eta {} s", secs * (t - d) / d)
-                            } else {
-                                String::new()
-                            };
-                            eprintln!("progress: {label}: {d}/{t} ({secs} s{eta})");
-                        } else {
-                            eprintln!("progress: {label}: still running ({secs} s)");
-                        }
+                        let what = label.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                        eprintln!("{}", line(&what, d, t, secs));
                     }
                 }
             })
             .ok();
         Lines {
+            what,
             stop,
             thread,
             done,
@@ -70,6 +62,22 @@ impl Lines {
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
+    }
+}
+
+/// One progress line: `progress: what: done/total (elapsed, eta)`, or `still running` for
+/// work without a count.
+fn line(what: &str, done: u64, total: u64, secs: u64) -> String {
+    let label = if what.is_empty() { "running" } else { what };
+    if total > 1 {
+        let eta = if done > 0 && done < total {
+            format!(", eta {} s", secs * (total - done) / done)
+        } else {
+            String::new()
+        };
+        format!("progress: {label}: {done}/{total} ({secs} s{eta})")
+    } else {
+        format!("progress: {label}: still running ({secs} s)")
     }
 }
 
@@ -115,6 +123,14 @@ impl Progress {
         }
     }
 
+    /// Sets what is running (the bar's message, the label of the next line).
+    pub fn set_message(&self, what: &str) {
+        self.bar.set_message(what.to_string());
+        if let Some(l) = &*self.lines.lock().unwrap_or_else(|e| e.into_inner()) {
+            *l.what.lock().unwrap_or_else(|e| e.into_inner()) = what.to_string();
+        }
+    }
+
     /// Sets the total.
     pub fn set_total(&self, total: u64) {
         self.bar.set_length(total);
@@ -141,5 +157,41 @@ impl Progress {
 impl Drop for Progress {
     fn drop(&mut self) {
         self.finish();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_name_the_work_its_count_and_its_stage() {
+        assert_eq!(
+            line("mass scan", 2, 4, 10),
+            "progress: mass scan: 2/4 (10 s, eta 10 s)"
+        );
+        assert_eq!(
+            line("mass scan", 4, 4, 20),
+            "progress: mass scan: 4/4 (20 s)"
+        );
+        assert_eq!(
+            line("", 0, 1, 30),
+            "progress: running: still running (30 s)"
+        );
+        // A stage set while running is the label of the next line.
+        let progress = Progress {
+            bar: ProgressBar::hidden(),
+            lines: Mutex::new(Some(Lines::start("spring derivation".to_string(), 1))),
+        };
+        progress.set_message("spring derivation, the small-motion check");
+        let what = {
+            let lines = progress.lines.lock().unwrap();
+            lines.as_ref().unwrap().what.lock().unwrap().clone()
+        };
+        assert_eq!(
+            line(&what, 0, 1, 10),
+            "progress: spring derivation, the small-motion check: still running (10 s)"
+        );
+        progress.finish();
     }
 }

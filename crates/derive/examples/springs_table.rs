@@ -190,7 +190,7 @@ fn main() {
             probes: vec![(0.5, 0.5)],
         };
         let start = Instant::now();
-        match derive_springs(&config, None) {
+        match derive_springs(&config, None, &mut |_| {}) {
             Ok(d) => {
                 if std::env::var_os("SPRINGS_VERBOSE").is_some() {
                     for c in &d.constants {

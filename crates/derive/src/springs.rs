@@ -165,11 +165,14 @@ pub struct SpringsDerivation {
     pub verdict: String,
 }
 
-/// Derives the spring model of a shell scene and validates it (module docs).
+/// Derives the spring model of a shell scene and validates it (module docs); `stage` is told
+/// each stage as it begins (for progress lines).
 pub fn derive_springs(
     config: &SpringsConfig,
     cancel: Option<Arc<AtomicBool>>,
+    stage: &mut dyn FnMut(&str),
 ) -> Result<SpringsDerivation, DeriveError> {
+    stage("the shell's modes and the calibration");
     let geometry = Geometry::Surface(config.surface.clone());
     let model = DnurbsModel::kirchhoff_love(
         geometry.clone(),
@@ -204,6 +207,7 @@ pub fn derive_springs(
         time: &config.time,
         cancel,
     };
+    stage("the small-motion check");
     let small_motion = check.small_motion(
         &config.initial,
         probe_nodes[0],
@@ -216,6 +220,7 @@ pub fn derive_springs(
             Some("the scene has no loads to scale into large motion".to_string()),
         )
     } else {
+        stage("the large-motion check (static load path, then the dynamic run)");
         (
             Some(check.large_motion(
                 &config.shell,

@@ -17,13 +17,14 @@ use crate::msm_file::msm_file;
 use crate::{Error, Scene};
 
 /// Derives the spring model of a Kirchhoff–Love scene; errors name the scene key they come
-/// from.
+/// from. `stage` is told each stage as it begins.
 pub fn derive_springs(
     scene: &Scene,
     cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    stage: &mut dyn FnMut(&str),
 ) -> Result<SpringsDerivation, Error> {
     let config = scene.springs_config()?;
-    nurbspring_derive::derive_springs(&config, cancel)
+    nurbspring_derive::derive_springs(&config, cancel, stage)
         .map_err(|e| scene.derive_error(crate::derivation::DERIVATION_KEY, e))
 }
 

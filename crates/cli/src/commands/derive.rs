@@ -72,7 +72,13 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
 /// The spring derivation of a Kirchhoff–Love scene (docs/math.md §11).
 fn run_springs(ctx: &Context, args: &DeriveArgs, scene: &Scene) -> CmdResult {
     let staged = stage_out_dir(&args.out)?;
-    let d = nurbspring_scene::springs_report::derive_springs(scene, Some(ctx.cancel.clone()))?;
+    let bar = Progress::new(ctx.global.quiet, "spring derivation", 1);
+    let d = nurbspring_scene::springs_report::derive_springs(
+        scene,
+        Some(ctx.cancel.clone()),
+        &mut |stage| bar.set_message(&format!("spring derivation, {stage}")),
+    )?;
+    bar.finish();
     let label = args.scene.display().to_string();
     nurbspring_scene::springs_report::write_springs(staged.path(), &label, scene, &d)?;
     let out = commit_out_dir(staged)?;
