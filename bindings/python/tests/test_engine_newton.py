@@ -1,9 +1,11 @@
 """The Newton export (`nurbspring export msm.json --format newton`) stepped by NVIDIA Newton on
 the CPU follows nurbspring's `simulate` of the same msm.json over 1 s (docs/export.md).
 
-Newton (`pip install newton`, which brings warp-lang, ~150 MB) is not installed by CI: the test
-runs with the interpreter named by NURBSPRING_NEWTON_PYTHON, or this one when it imports newton,
-and is skipped with the reason otherwise:
+The test runs Newton with the interpreter named by NURBSPRING_NEWTON_PYTHON, or this one when it
+imports newton. Otherwise it installs Newton (`pip install newton`, which brings warp-lang,
+about 150 MB) into its own virtual environment, kept in the temporary folder for later runs
+(NURBSPRING_NEWTON_VENV names another place), and is skipped with pip's reason when that
+cannot be done (no network, no space). NURBSPRING_NEWTON_INSTALL=0 skips the installation.
 
     python3 -m venv /tmp/newton && /tmp/newton/bin/pip install newton
     NURBSPRING_NEWTON_PYTHON=/tmp/newton/bin/python pytest bindings/python/tests/test_engine_newton.py
@@ -14,29 +16,58 @@ import math
 import os
 import subprocess
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 
-def _newton_python():
-    candidates = [os.environ.get("NURBSPRING_NEWTON_PYTHON"), sys.executable]
-    for python in filter(None, candidates):
+def _imports_newton(python):
+    try:
+        return subprocess.run([python, "-c", "import newton, warp"], capture_output=True,
+                              timeout=300).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+
+
+def _install_newton():
+    """Newton in the test's own virtual environment: (python, None), or (None, why not)."""
+    if os.environ.get("NURBSPRING_NEWTON_INSTALL") == "0":
+        return None, "NURBSPRING_NEWTON_INSTALL=0"
+    venv = Path(os.environ.get("NURBSPRING_NEWTON_VENV")
+                or Path(tempfile.gettempdir()) / "nurbspring-newton-venv")
+    python = venv / "bin" / "python"
+    if python.exists() and _imports_newton(str(python)):
+        return str(python), None
+    steps = [[sys.executable, "-m", "venv", str(venv)],
+             [str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
+              "numpy", "newton"]]
+    for step in steps:
         try:
-            ok = subprocess.run([python, "-c", "import newton, warp"], capture_output=True,
-                                timeout=300).returncode == 0
-        except (OSError, subprocess.TimeoutExpired):
-            ok = False
-        if ok:
-            return python
-    return None
+            done = subprocess.run(step, capture_output=True, text=True, timeout=900)
+        except (OSError, subprocess.TimeoutExpired) as e:
+            return None, f"{' '.join(step[:4])}: {e}"
+        if done.returncode != 0:
+            lines = (done.stderr or done.stdout).strip().splitlines()
+            return None, f"{' '.join(step[:4])} failed: {lines[-1] if lines else done.returncode}"
+    if _imports_newton(str(python)):
+        return str(python), None
+    return None, f"newton installed in {venv} but does not import"
 
 
-NEWTON_PYTHON = _newton_python()
+def _newton_python():
+    for python in filter(None, [os.environ.get("NURBSPRING_NEWTON_PYTHON"), sys.executable]):
+        if _imports_newton(python):
+            return python, None
+    return _install_newton()
+
+
+NEWTON_PYTHON, WHY_NOT = _newton_python()
 needs_newton = pytest.mark.skipif(
     NEWTON_PYTHON is None,
-    reason="NVIDIA Newton is not installed here (pip install newton into a venv and set "
-    "NURBSPRING_NEWTON_PYTHON to its python)",
+    reason=f"NVIDIA Newton could not be installed here ({WHY_NOT}); pip install newton into a "
+    "venv and set NURBSPRING_NEWTON_PYTHON to its python",
 )
 
 
