@@ -43,7 +43,7 @@ pub struct MassCandidate {
 }
 
 /// Serde's filter for a number that is not written (JSON has no infinity).
-fn not_finite(x: &f64) -> bool {
+pub(crate) fn not_finite(x: &f64) -> bool {
     !x.is_finite()
 }
 

@@ -201,9 +201,12 @@ pub struct DynamicsReading {
     pub t_end: f64,
     /// Explicit stability limit of this MSM.
     pub dt_critical: f64,
-    /// RMS of the central node's z difference.
+    /// RMS of the central node's z difference (left out of report.json when the MSM run
+    /// stopped: see `msm_stopped`).
+    #[serde(skip_serializing_if = "crate::outcome::not_finite")]
     pub rms: f64,
     /// RMS relative to the D-NURBS amplitude.
+    #[serde(skip_serializing_if = "crate::outcome::not_finite")]
     pub relative_rms: f64,
     /// D-NURBS amplitude of the central node in z.
     pub dnurbs_amplitude: f64,
