@@ -229,9 +229,21 @@ fn main() {
                 let (stat, dynamic) = match &d.large_motion {
                     Some(l) => (
                         match (l.static_error, l.largest_displacement) {
-                            (Some(e), Some(r)) => {
-                                format!("{:.2} % ({:.0} %)", 100.0 * e, 100.0 * r)
-                            }
+                            (Some(e), Some(r)) => format!(
+                                "{:.2} % ({:.0} %{}{})",
+                                100.0 * e,
+                                100.0 * r,
+                                if l.shell_limit.is_some() {
+                                    ", below the shell's limit point"
+                                } else {
+                                    ""
+                                },
+                                if l.static_failure.is_some() {
+                                    ", the lattice buckles beyond"
+                                } else {
+                                    ""
+                                }
+                            ),
                             _ => "stopped".into(),
                         },
                         match &l.dynamic {

@@ -616,9 +616,19 @@ fn verdict(d: &SpringsDerivation) -> String {
         Some(l) => {
             match (l.largest_displacement, l.static_error) {
                 (Some(reach), Some(e)) => parts.push(format!(
-                    "large static motion up to {:.0} % of the size: node error {:.1} %",
+                    "large static motion up to {:.0} % of the size{}: node error {:.1} %{}",
                     100.0 * reach,
-                    100.0 * e
+                    if l.shell_limit.is_some() {
+                        " (below the shell's limit point)"
+                    } else {
+                        ""
+                    },
+                    100.0 * e,
+                    if l.static_failure.is_some() {
+                        " (the spring model buckles beyond)"
+                    } else {
+                        ""
+                    }
                 )),
                 _ => parts.push("large static motion not compared (the load path stopped)".into()),
             }

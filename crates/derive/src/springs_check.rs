@@ -263,7 +263,16 @@ pub struct LargeMotion {
     /// Why the dynamic run stopped, when it did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dynamic_failure: Option<String>,
+    /// The load factor where the shell's own load path stops (a limit point: it snaps through
+    /// or buckles) before its farthest node moves [`LARGE_MOTION`] of the size; the runs are
+    /// then at [`BELOW_LIMIT`] of it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shell_limit: Option<f64>,
 }
+
+/// The share of the shell's limit load the large-motion runs take when the shell has a limit
+/// point before it moves [`LARGE_MOTION`] of the size.
+pub const BELOW_LIMIT: f64 = 0.9;
 
 /// What the checks share.
 pub struct Check<'a> {
@@ -487,6 +496,7 @@ impl Check<'_> {
             static_failure: None,
             dynamic: None,
             dynamic_failure: None,
+            shell_limit: None,
         };
         let mut attempt = 0;
         let (scaled, path) = loop {
@@ -495,13 +505,23 @@ impl Check<'_> {
                 Ok(path) => {
                     let d = largest(&path.levels.last().expect("levels ≥ 1").p);
                     attempt += 1;
-                    if d >= LARGE_MOTION || attempt == 3 {
+                    // Below a limit point the path is taken as it is: a larger load would
+                    // pass the limit again.
+                    if d >= LARGE_MOTION || attempt == 3 || out.shell_limit.is_some() {
                         break (scaled, Some(path));
                     }
                     factor *= 1.05 * LARGE_MOTION / d.max(1e-12);
                 }
                 Err(nurbspring_dnurbs::DnurbsError::Cancelled) => {
                     return Err(DeriveError::Cancelled);
+                }
+                // The shell itself stops at a limit point on the way: the runs are made
+                // below it (once; a mechanism, stopped at 0, has no such load).
+                Err(nurbspring_dnurbs::DnurbsError::PathStopped { lambda, .. })
+                    if lambda > 0.0 && out.shell_limit.is_none() =>
+                {
+                    out.shell_limit = Some(factor * lambda);
+                    factor *= BELOW_LIMIT * lambda;
                 }
                 Err(e) => {
                     out.static_failure = Some(format!("the shell's load path stopped: {e}"));
@@ -520,8 +540,9 @@ impl Check<'_> {
         if let Some(path) = path {
             let lambdas: Vec<f64> = path.levels.iter().map(|l| l.lambda).collect();
             match static_path(&msm, &lambdas, &cancel) {
-                Ok(states) => {
-                    for (level, q) in path.levels.iter().zip(&states) {
+                Ok(lattice_path) => {
+                    // The levels both models reached (all of them unless the lattice stops).
+                    for (level, q) in path.levels.iter().zip(&lattice_path.states) {
                         let target = self.map.positions(&level.p);
                         let (max_error, rms_error) =
                             node_errors(&msm.full_positions(q), &target, self.size);
@@ -534,6 +555,7 @@ impl Check<'_> {
                     }
                     out.largest_displacement = out.levels.last().map(|l| l.shell_displacement);
                     out.static_error = out.levels.iter().map(|l| l.max_error).reduce(f64::max);
+                    out.static_failure = lattice_path.stopped;
                 }
                 Err(DeriveError::Cancelled) => return Err(DeriveError::Cancelled),
                 Err(e) => out.static_failure = Some(reason(e)),
@@ -664,14 +686,24 @@ const LOOSE_TOLERANCE: f64 = 1e-6;
 /// A Newton step this small against the largest coordinate is at round-off.
 const STEP_ROUND_OFF: f64 = 1e-13;
 
+/// The equilibria of a lattice along a load path ([`static_path`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StaticPath {
+    /// The positions at each level reached, in order.
+    pub states: Vec<Vec<f64>>,
+    /// Why the path stopped before the last level, when it did.
+    pub stopped: Option<String>,
+}
+
 /// The equilibrium `f_int(q) = λ f_ext` of a lattice at each `λ` of `lambdas` (ascending, in
 /// (0, 1]): load increments, Newton's method with the consistent tangent (LU) and a residual
-/// line search, an increment that fails halved (down to 1/1024 of a level).
+/// line search, an increment that fails halved (down to 1/1024 of a level). A path that
+/// cannot be followed further keeps the levels it reached and says where it stopped.
 pub fn static_path(
     model: &MsmModel,
     lambdas: &[f64],
     cancel: &dyn Fn() -> bool,
-) -> Result<Vec<Vec<f64>>, DeriveError> {
+) -> Result<StaticPath, DeriveError> {
     let n = model.n_dofs();
     let mut f = vec![0.0; n];
     model.external_force(0.0, &mut f);
@@ -749,17 +781,21 @@ pub fn static_path(
             } else {
                 step *= 0.5;
                 if step < target / 1024.0 * 1e-3 {
-                    return Err(DeriveError::SingularFit {
-                        detail: format!(
+                    return Ok(StaticPath {
+                        states: out,
+                        stopped: Some(format!(
                             "the spring model's equilibrium was not found past load factor \
                              {lambda:.4} of the large-motion load (the lattice buckles or \
                              folds where the shell does not)"
-                        ),
+                        )),
                     });
                 }
             }
         }
         out.push(q.clone());
     }
-    Ok(out)
+    Ok(StaticPath {
+        states: out,
+        stopped: None,
+    })
 }

@@ -220,3 +220,70 @@ fn sze_cantilever_nodes_follow_the_shell_at_every_load_level() {
     assert!(large.largest_displacement.unwrap() > 0.7);
     assert!(d.small_motion.relative_rms < 0.03, "{:?}", d.small_motion);
 }
+
+/// The lattice's load path on a von Mises truss: two springs k from the fixed nodes (∓1, 0, 0)
+/// to an apex at height h = 0.2, two springs k_z = 1 from the apex to fixed nodes at
+/// (0, h, ±1) (its only stiffness out of the plane, symmetric), a downward force F on the
+/// apex. Its equilibria satisfy `F = R(y) = 2k (L₀ − L) y / L + 2k_z (L_z − 1)(h − y) / L_z` with
+/// `L = √(1 + y²)`, `L_z = √(1 + (h − y)²)`, whose largest value on `0 < y < h` is the limit
+/// load. Below it every level is reached and is that equilibrium; past it the path keeps the
+/// levels it reached and says where it stopped.
+#[test]
+fn a_lattice_load_path_stops_at_its_limit_point_and_keeps_the_levels_below() {
+    let (k, kz, h) = (100.0, 1.0, 0.2);
+    let l0 = (1.0_f64 + h * h).sqrt();
+    let resistance = |y: f64| {
+        let l = (1.0 + y * y).sqrt();
+        let lz = (1.0 + (h - y) * (h - y)).sqrt();
+        2.0 * k * (l0 - l) * y / l + 2.0 * kz * (lz - 1.0) * (h - y) / lz
+    };
+    // The limit load: the largest R over y in (0, h), by a fine sampling (R is smooth with one
+    // maximum there).
+    let limit = (1..10_000)
+        .map(|i| resistance(h * i as f64 / 10_000.0))
+        .fold(0.0_f64, f64::max);
+    let truss = |f: f64| {
+        nurbspring_msm::MsmModel::new(
+            SpringLattice::from_file(
+                &nurbspring_msm::MsmFile::from_json_str(&format!(
+                    r#"{{"nodes": [{{"position": [-1, 0, 0], "mass": 1, "fixed": true}},
+                                  {{"position": [1, 0, 0], "mass": 1, "fixed": true}},
+                                  {{"position": [0, {h}, 1], "mass": 1, "fixed": true}},
+                                  {{"position": [0, {h}, -1], "mass": 1, "fixed": true}},
+                                  {{"position": [0, {h}, 0], "mass": 1, "force": [0, {}, 0]}}],
+                       "springs": [{{"a": 0, "b": 4, "k": {k}}}, {{"a": 1, "b": 4, "k": {k}}},
+                                   {{"a": 2, "b": 4, "k": {kz}}}, {{"a": 3, "b": 4, "k": {kz}}}]}}"#,
+                    -f
+                ))
+                .unwrap(),
+            )
+            .unwrap(),
+        )
+        .unwrap()
+    };
+    // Full load at 1.5 × the limit: the levels at 0.3 and 0.6 of it are below the limit.
+    let model = truss(1.5 * limit);
+    let path = nurbspring_derive::static_path(&model, &[0.3, 0.6, 1.0], &|| false).unwrap();
+    assert_eq!(path.states.len(), 2, "{path:?}");
+    assert!(
+        path.stopped.as_ref().unwrap().contains("buckles"),
+        "{path:?}"
+    );
+    for (q, lambda) in path.states.iter().zip([0.3, 0.6]) {
+        let x = model.full_positions(q);
+        let y = x[13];
+        assert!(x[12].abs() < 1e-9 && x[14].abs() < 1e-9, "{x:?}");
+        let f = lambda * 1.5 * limit;
+        assert!(
+            (resistance(y) - f).abs() <= 1e-6 * limit,
+            "{y}: {} against {f}",
+            resistance(y)
+        );
+        // The branch before the limit: the apex still above the plane of the supports.
+        assert!(y > 0.0 && y < h);
+    }
+    // Below the limit every level is reached.
+    let below =
+        nurbspring_derive::static_path(&truss(0.9 * limit), &[0.5, 1.0], &|| false).unwrap();
+    assert_eq!((below.states.len(), below.stopped), (2, None));
+}

@@ -217,6 +217,15 @@ pub fn springs_markdown(scene_label: &str, d: &SpringsDerivation) -> String {
                 l.load_factor,
                 100.0 * LARGE_MOTION
             );
+            if let Some(limit) = l.shell_limit {
+                let _ = writeln!(
+                    s,
+                    "The shell's own load path stops at the load factor {limit:.4} (a limit \
+                     point: it snaps through or buckles) before moving that far, so the runs \
+                     are at {:.0} % of that load.\n",
+                    100.0 * nurbspring_derive::BELOW_LIMIT
+                );
+            }
             if !l.levels.is_empty() {
                 let _ = writeln!(
                     s,
