@@ -80,8 +80,8 @@ pub use modal_solution::{DENSE_MODES, ModalBasis, TRUNCATED_MODES};
 pub use omega::{NodeState, Omega};
 pub use outcome::{
     Derivation, DerivedModel, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate,
-    MassReport, NodeReduction, ParameterSet, ProbeError, ReductionReport, Regime, Spectrum,
-    TrustRegionReport, Validation,
+    MassReport, NodeReduction, ParameterSet, ProbeError, PrunedRun, ReductionReport, Regime,
+    Spectrum, TrustRegionReport, Validation,
 };
 pub use pipeline::{
     Judge, MAX_SPECTRUM_DOFS, SCAN_BATCH, SelectedReading, derive_msm, evaluate, fit_step,

@@ -26,13 +26,9 @@ pub struct MassCandidate {
     /// Max abs of that difference (as `rms`).
     #[serde(skip_serializing_if = "not_finite")]
     pub max_abs: f64,
-    /// A pruned candidate ([`crate::MassScan::Pruned`]): the time its run stopped, when the
-    /// running sum of its squared errors already exceeded the best complete candidate's total.
+    /// Where a pruned run stopped ([`crate::MassScan::Pruned`]).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub pruned_at: Option<f64>,
-    /// A pruned candidate's lower bound of its RMS over the whole run (above the best's).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rms_at_least: Option<f64>,
+    pub pruned: Option<PrunedRun>,
     /// Integrator used for this candidate.
     pub integrator: IntegratorKind,
     /// Its steps per Δt (more than 1: an explicit scheme kept below its stability limit).
@@ -40,6 +36,17 @@ pub struct MassCandidate {
     /// Why the run stopped early, if it did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+}
+
+/// A candidate's run stopped once the running sum of its squared errors exceeded the best
+/// complete candidate's total.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PrunedRun {
+    /// The time the run stopped [s].
+    pub at: f64,
+    /// The lower bound of its RMS over the whole run (above the best's): `√(Σ d² / N)` of the
+    /// samples it ran.
+    pub rms_at_least: f64,
 }
 
 /// Serde's filter for a number that is not written (JSON has no infinity).

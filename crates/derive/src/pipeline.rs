@@ -20,7 +20,7 @@ use crate::mass::{mass_eigenvalues, mass_eigenvalues_computable};
 use crate::method::Method;
 use crate::outcome::{
     Derivation, DerivedModel, FitDetail, FitReport, FrequencyRow, MassCandidate, MassReport,
-    ParameterSet, Spectrum, TrustRegionReport, Validation,
+    ParameterSet, PrunedRun, Spectrum, TrustRegionReport, Validation,
 };
 use crate::reference::{ReferenceKind, run_scalar, sample_times};
 use crate::runner::{Watched, record_noted};
@@ -273,15 +273,16 @@ fn mass_candidates(
             m,
             rms: f64::INFINITY,
             max_abs: f64::INFINITY,
-            pruned_at: None,
-            rms_at_least: None,
+            pruned: None,
             integrator: schedule.integrator,
             substeps: schedule.substeps,
             stopped: traj.stopped.clone(),
         };
         if pruned {
-            candidate.pruned_at = traj.t.last().copied();
-            candidate.rms_at_least = Some((sum / samples as f64).sqrt());
+            candidate.pruned = Some(PrunedRun {
+                at: traj.t.last().copied().unwrap_or(0.0),
+                rms_at_least: (sum / samples as f64).sqrt(),
+            });
             return Ok(candidate);
         }
         let c = compare(&dnurbs.t, &z_ref, &traj.component(0, 2));

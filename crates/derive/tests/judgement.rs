@@ -520,9 +520,9 @@ fn the_paper_derivation_reports_its_own_numbers() {
     let mut pruned = 0;
     for (p, w) in d.mass.candidates.iter().zip(&c.mass.candidates) {
         assert_eq!(p.m, w.m);
-        assert!(w.pruned_at.is_none() && w.rms.is_finite());
-        match (p.pruned_at, p.rms_at_least) {
-            (Some(t), Some(bound)) => {
+        assert!(w.pruned.is_none() && w.rms.is_finite());
+        match p.pruned.map(|r| (r.at, r.rms_at_least)) {
+            Some((t, bound)) => {
                 pruned += 1;
                 assert!(!p.rms.is_finite() && t < config.time.t_end, "{p:?}");
                 assert!(
@@ -530,7 +530,7 @@ fn the_paper_derivation_reports_its_own_numbers() {
                     "{p:?} {w:?}"
                 );
             }
-            _ => assert_eq!(p.rms, w.rms, "{p:?} {w:?}"),
+            None => assert_eq!(p.rms, w.rms, "{p:?} {w:?}"),
         }
     }
     // Candidates after the first batch whose RMS is well above the best are pruned.

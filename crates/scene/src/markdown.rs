@@ -310,12 +310,12 @@ fn paper_sections(s: &mut String, d: &Derivation, fit: &FitReport) {
                     "–".to_string()
                 }
             };
-            let (rms, note) = match (c.rms_at_least, c.pruned_at) {
-                (Some(bound), Some(t)) => (
-                    format!("≥ {bound:.4e}"),
-                    format!("stopped at t = {t}: above the best already"),
+            let (rms, note) = match c.pruned {
+                Some(p) => (
+                    format!("≥ {:.4e}", p.rms_at_least),
+                    format!("stopped at t = {:.4} s: above the best already", p.at),
                 ),
-                _ => (number(c.rms), c.stopped.clone().unwrap_or_default()),
+                None => (number(c.rms), c.stopped.clone().unwrap_or_default()),
             };
             let _ = writeln!(
                 s,

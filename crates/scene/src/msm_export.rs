@@ -648,17 +648,31 @@ def createScene(root):
 
 /// Writes the SOFA scene of an MSM (atomically); returns what SOFA could not hold, for a warning.
 pub fn write_msm_sofa(path: &Path, setup: &MsmSetup, source: &str) -> Result<Vec<String>, Error> {
+    write_export(path, setup, "sofa", |file_name| {
+        sofa_scene(setup, source, file_name)
+    })?;
+    Ok(sofa_limitations(setup))
+}
+
+/// Writes (atomically) the text `build(file name)` makes of an MSM for `--format format`; a
+/// model the format cannot express is refused naming the flag and the model file.
+fn write_export(
+    path: &Path,
+    setup: &MsmSetup,
+    format: &str,
+    build: impl FnOnce(&str) -> Result<String, String>,
+) -> Result<(), Error> {
     let file_name = path.file_name().map_or_else(
         || path.display().to_string(),
         |f| f.to_string_lossy().into_owned(),
     );
-    let text = sofa_scene(setup, source, &file_name).map_err(|message| {
+    let text = build(&file_name).map_err(|message| {
         Error::option(
             "--format",
-            "sofa",
+            format,
             format!("{}: {message}", setup.path.display()),
         )
     })?;
     write_atomic_bytes(path, text.as_bytes())?;
-    Ok(sofa_limitations(setup))
+    Ok(())
 }

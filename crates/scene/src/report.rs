@@ -561,7 +561,7 @@ fn write_plots(
         .mass
         .candidates
         .iter()
-        .filter_map(|c| c.rms_at_least.map(|bound| (c.m, bound)))
+        .filter_map(|c| c.pruned.map(|p| (c.m, p.rms_at_least)))
         .filter(|&(_, bound)| bound.is_finite() && bound > 0.0)
         .collect();
     let mut scan_series = vec![Series::points("candidates", scan.clone())];

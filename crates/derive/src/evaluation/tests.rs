@@ -435,8 +435,7 @@ fn candidate(m: f64) -> crate::outcome::MassCandidate {
         integrator: nurbspring_sim::IntegratorKind::Newmark,
         substeps: 1,
         stopped: None,
-        pruned_at: None,
-        rms_at_least: None,
+        pruned: None,
     }
 }
 

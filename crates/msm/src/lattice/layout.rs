@@ -334,17 +334,21 @@ pub(super) fn grid_springs(
     let idx = |i: usize, j: usize| i * n_v + j;
     let has = |kind| o.constants.contains(Class::Spring(kind));
     let mut pairs: Vec<(usize, usize, SpringKind)> = Vec::new();
-    if has(SpringKind::Structural) {
+    // Along the grid lines, `step` nodes apart.
+    let along = |step: usize, kind: SpringKind, pairs: &mut Vec<_>| {
         for i in 0..n_u {
             for j in 0..n_v {
-                if j + 1 < n_v {
-                    pairs.push((idx(i, j), idx(i, j + 1), SpringKind::Structural));
+                if j + step < n_v {
+                    pairs.push((idx(i, j), idx(i, j + step), kind));
                 }
-                if i + 1 < n_u {
-                    pairs.push((idx(i, j), idx(i + 1, j), SpringKind::Structural));
+                if i + step < n_u {
+                    pairs.push((idx(i, j), idx(i + step, j), kind));
                 }
             }
         }
+    };
+    if has(SpringKind::Structural) {
+        along(1, SpringKind::Structural, &mut pairs);
     }
     if has(SpringKind::Shear) {
         for i in 0..n_u.saturating_sub(1) {
@@ -355,16 +359,7 @@ pub(super) fn grid_springs(
         }
     }
     if has(SpringKind::Bend) {
-        for i in 0..n_u {
-            for j in 0..n_v {
-                if j + 2 < n_v {
-                    pairs.push((idx(i, j), idx(i, j + 2), SpringKind::Bend));
-                }
-                if i + 2 < n_u {
-                    pairs.push((idx(i, j), idx(i + 2, j), SpringKind::Bend));
-                }
-            }
-        }
+        along(2, SpringKind::Bend, &mut pairs);
     }
     let scale = 1.0 - o.pre_strain;
     pairs

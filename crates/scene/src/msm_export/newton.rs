@@ -288,18 +288,9 @@ if __name__ == "__main__":
 /// Writes the Newton script of an MSM (atomically); returns what the script does differently
 /// from the model's own run, for a warning.
 pub fn write_msm_newton(path: &Path, setup: &MsmSetup, source: &str) -> Result<Vec<String>, Error> {
-    let file_name = path.file_name().map_or_else(
-        || path.display().to_string(),
-        |f| f.to_string_lossy().into_owned(),
-    );
-    let text = newton_script(setup, source, &file_name).map_err(|message| {
-        Error::option(
-            "--format",
-            "newton",
-            format!("{}: {message}", setup.path.display()),
-        )
+    write_export(path, setup, "newton", |file_name| {
+        newton_script(setup, source, file_name)
     })?;
-    write_atomic_bytes(path, text.as_bytes())?;
     Ok(newton_plan(setup)
         .map(|(_, notes)| notes)
         .unwrap_or_default())
