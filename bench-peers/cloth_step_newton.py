@@ -34,7 +34,7 @@ wp.config.quiet = True
 import newton  # noqa: E402
 
 wp.init()
-DT = 1e-5  # benches/support/cloth.rs
+DT = 1e-5  # benches/support/lattices.rs
 
 
 def load(d):

@@ -7,7 +7,7 @@
 //!   (forces of every spring and hinge, gravity, the update of q and v);
 //! - `cloth/internal_force/256x256`: the spring and hinge forces alone.
 //!
-//! The cloth (`benches/support/cloth.rs`): 65,536 nodes, 195,585 springs, 194,565 hinges.
+//! The cloth (`benches/support/lattices.rs`): 65,536 nodes, 195,585 springs, 194,565 hinges.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -15,7 +15,7 @@ use std::time::Duration;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nurbspring_sim::{DynamicModel, IntegratorKind, make_stepper};
 
-#[path = "support/cloth.rs"]
+#[path = "support/lattices.rs"]
 mod support;
 
 fn cloth_step(c: &mut Criterion) {

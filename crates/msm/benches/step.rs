@@ -32,17 +32,16 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_linalg::{ShiftedSum, SparseMatrix, SpdSolver};
-use nurbspring_msm::{
-    Class, Constants, FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringKind,
-    SpringLattice,
-};
+use nurbspring_msm::MsmModel;
 use nurbspring_sim::{
-    DynamicModel, IntegratorKind, RunOptions, State, SystemMatrix, make_stepper,
-    make_stepper_with_options,
+    DynamicModel, IntegratorKind, RunOptions, SystemMatrix, make_stepper, make_stepper_with_options,
 };
 use rayon::prelude::*;
+
+#[path = "support/lattices.rs"]
+mod support;
+use support::{perturbed_state, sheet};
 
 /// The model with its fused step hidden, so that `nurbspring-sim` takes the generic path.
 struct Generic<'a>(&'a MsmModel);
@@ -82,38 +81,6 @@ fn triad(a: &mut [f64], b: &[f64], c: &[f64], s: f64) {
                 *a = b + s * c;
             }
         });
-}
-
-/// A gently curved bilinear sheet, `n × n` nodes, spacing ≈ 1 / (n − 1), structural + shear
-/// springs, the two corners of the `v = 0` edge fixed, gravity on.
-fn sheet(n: usize) -> MsmModel {
-    let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
-    let pts = vec![[0., 0., 0.], [0., 1., 0.1], [1., 0., 0.1], [1., 1., 0.]];
-    let surface = NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 4]).unwrap();
-    let options = LatticeOptions {
-        grid: ParameterGrid::Uniform {
-            nodes_u: n,
-            nodes_v: n,
-        },
-        constants: Constants::from_pairs([
-            (Class::Spring(SpringKind::Structural), 1000.0),
-            (Class::Spring(SpringKind::Shear), 500.0),
-        ]),
-        mass: 1.0 / (n * n) as f64,
-        fixed: FixedNodes::List(vec![0, (n - 1) * n]),
-        gravity: [0.0, 0.0, -9.81],
-        ..Default::default()
-    };
-    let lattice = SpringLattice::from_surface(&surface, &options, &[]).unwrap();
-    MsmModel::new(lattice).unwrap()
-}
-
-fn perturbed_state(model: &MsmModel) -> State {
-    let mut state = model.initial_state(&[]);
-    for (i, q) in state.q.iter_mut().enumerate() {
-        *q += 1e-4 * ((i as f64) * 0.7).sin();
-    }
-    state
 }
 
 fn memory(c: &mut Criterion) {

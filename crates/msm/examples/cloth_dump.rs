@@ -10,7 +10,7 @@ use std::io::Write;
 
 use nurbspring_sim::{IntegratorKind, State, make_stepper};
 
-#[path = "../benches/support/cloth.rs"]
+#[path = "../benches/support/lattices.rs"]
 mod support;
 
 fn write_f64(path: &std::path::Path, values: &[f64]) {

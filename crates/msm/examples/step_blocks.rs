@@ -11,13 +11,13 @@
 
 use std::time::Instant;
 
-use nurbspring_geom::{KnotVector, NurbsSurface};
 use nurbspring_linalg::SparseMatrix;
-use nurbspring_msm::{
-    Class, Constants, FixedNodes, LatticeOptions, MsmModel, ParameterGrid, SpringKind,
-    SpringLattice,
-};
+use nurbspring_msm::MsmModel;
 use nurbspring_sim::{DynamicModel, IntegratorKind, SystemMatrix, make_stepper};
+
+#[path = "../benches/support/lattices.rs"]
+mod support;
+use support::{perturbed_state, sheet};
 
 /// The model with its fused step hidden, so that `nurbspring-sim` takes the generic path.
 struct Generic<'a>(&'a MsmModel);
@@ -46,34 +46,9 @@ impl DynamicModel for Generic<'_> {
     }
 }
 
-/// `sheet(256)` of `benches/step.rs`.
-fn sheet(n: usize) -> MsmModel {
-    let k = KnotVector::try_new(vec![0., 0., 1., 1.], 1).unwrap();
-    let pts = vec![[0., 0., 0.], [0., 1., 0.1], [1., 0., 0.1], [1., 1., 0.]];
-    let surface = NurbsSurface::try_new(k.clone(), k, pts, vec![1.0; 4]).unwrap();
-    let options = LatticeOptions {
-        grid: ParameterGrid::Uniform {
-            nodes_u: n,
-            nodes_v: n,
-        },
-        constants: Constants::from_pairs([
-            (Class::Spring(SpringKind::Structural), 1000.0),
-            (Class::Spring(SpringKind::Shear), 500.0),
-        ]),
-        mass: 1.0 / (n * n) as f64,
-        fixed: FixedNodes::List(vec![0, (n - 1) * n]),
-        gravity: [0.0, 0.0, -9.81],
-        ..Default::default()
-    };
-    MsmModel::new(SpringLattice::from_surface(&surface, &options, &[]).unwrap()).unwrap()
-}
-
 fn main() {
     let model = sheet(256);
-    let mut state = model.initial_state(&[]);
-    for (i, q) in state.q.iter_mut().enumerate() {
-        *q += 1e-4 * ((i as f64) * 0.7).sin();
-    }
+    let state = perturbed_state(&model);
     let dt = 1e-5;
     let generic = Generic(&model);
     println!(
