@@ -644,8 +644,8 @@ fn derive<'py>(
         })
         .transpose()?;
     let choice = scene.choose_derivation(requested.map(|m| (m, "derivation")));
-    if choice.method == Method::Springs {
-        return derive_springs(py, scene);
+    if scene.derives_springs(&choice) {
+        return derive_springs(py, scene, &choice);
     }
     let derived = run_blocking(py, |cancel| -> Result<Derivation, Error> {
         let mut bar = progress_printer(progress, "mass scan");
@@ -661,10 +661,11 @@ fn derive<'py>(
 fn derive_springs<'py>(
     py: Python<'py>,
     scene: &nurbspring_scene::Scene,
+    choice: &nurbspring_scene::DerivationChoice,
 ) -> PyResult<Bound<'py, PyDict>> {
     use nurbspring_scene::springs_report::{SpringsReport, springs_msm_file};
     let d = run_blocking(py, |cancel| {
-        nurbspring_scene::springs_report::derive_springs(scene, Some(cancel), &mut |_| {})
+        nurbspring_scene::springs_report::derive_springs(scene, choice, Some(cancel), &mut |_| {})
     })?
     .map_err(py_err)?;
     let label = scene.path.display().to_string();

@@ -68,3 +68,11 @@ def test_springs_derivation_equals_the_cli(cli, tmp_path):
     assert d.central_node["t"].size == 0
     # The lowest elastic frequency is the shell's.
     assert abs(d.report["frequencies"][0]["relative_error"]) < 1e-9
+
+
+def test_modal_derivation_of_a_shell_groups_by_band():
+    d = ns.derive(ns.Scene.load("examples/cloth_corners.toml"), derivation="modal")
+    assert d.report["derivation"] == "modal"
+    groups = d.report["groups"]
+    assert sum(g["elements"] for g in groups) == d.report["springs"] + d.report["hinges"]
+    assert abs(d.report["frequencies"][0]["relative_error"]) < 1e-9

@@ -190,6 +190,53 @@ fn cloth_derives_springs_and_hinges_that_simulate() {
         .success();
 }
 
+/// `derive --derivation modal` of a shell makes the same springs and hinges with one scale per
+/// class and band, reported as groups; a derivation of the tension plate is refused naming the
+/// option.
+#[test]
+fn a_shell_derives_modal_springs_and_refuses_the_paper() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m");
+    bin()
+        .arg("derive")
+        .arg(example("cloth_corners.toml"))
+        .arg("--derivation")
+        .arg("modal")
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(null_in(&report, "report"), None);
+    assert_eq!(report["derivation"], "modal");
+    let groups = report["groups"].as_array().unwrap();
+    let grouped: u64 = groups.iter().map(|g| g["elements"].as_u64().unwrap()).sum();
+    assert_eq!(
+        grouped,
+        report["springs"].as_u64().unwrap() + report["hinges"].as_u64().unwrap()
+    );
+    let first = report["frequencies"][0]["relative_error"].as_f64().unwrap();
+    assert!(first.abs() < 1e-9, "{first}");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("modal"), "{md}");
+    let refused = bin()
+        .arg("derive")
+        .arg(example("cloth_corners.toml"))
+        .arg("--derivation")
+        .arg("paper")
+        .arg("--out")
+        .arg(dir.path().join("p"))
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&refused.get_output().stderr).to_string();
+    assert!(
+        err.contains("--derivation") && err.contains("\"modal\" or \"springs\""),
+        "{err}"
+    );
+    assert!(!dir.path().join("p").exists());
+}
+
 /// What the spring lattice cannot carry is refused with the key: the quarter roof's symmetry
 /// edges (a lattice node is fixed whole), and the spring derivation of a tension plate.
 #[test]

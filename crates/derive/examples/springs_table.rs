@@ -1,14 +1,15 @@
 //! The spring derivation on a family of shell scenes (docs/derivations.md, "The spring
 //! derivation"): flat, cylindrical and doubly curved; clamped, pinned at corners, free edges;
-//! 9² to 33² nets. Prints one Markdown row per scene.
+//! 9² to 33² nets. Prints one Markdown row per scene, of the derivation METHOD (`springs`, the
+//! default, or `modal`).
 //!
 //! ```text
-//! cargo run --release -p nurbspring-derive --example springs_table [-- NAME_FILTER]
+//! cargo run --release -p nurbspring-derive --example springs_table [-- NAME_FILTER [METHOD]]
 //! ```
 
 use std::time::Instant;
 
-use nurbspring_derive::{InitialConditions, SpringsConfig, TimeSettings, derive_springs};
+use nurbspring_derive::{InitialConditions, Method, SpringsConfig, TimeSettings, derive_springs};
 use nurbspring_dnurbs::obstacle::{cylinder_sector, rectangle, refined, sphere_zone};
 use nurbspring_dnurbs::{
     Constraints, DnurbsOptions, Edge, EdgeCondition, EdgeConstraint, EdgeLoad, Loads, PointLoad,
@@ -161,6 +162,14 @@ fn cases() -> Vec<Case> {
 
 fn main() {
     let filter = std::env::args().nth(1).unwrap_or_default();
+    let method = std::env::args()
+        .nth(2)
+        .map_or(Some(Method::Springs), |m| Method::parse(&m))
+        .filter(|m| m.spring_groups().is_some())
+        .unwrap_or_else(|| {
+            eprintln!("METHOD: springs or modal");
+            std::process::exit(2)
+        });
     println!(
         "| scene | nodes | lowest 6 within 3 % (worst) | small motion | large static (reach) | large dynamic | time |"
     );
@@ -188,6 +197,7 @@ fn main() {
                 msm_integrator: IntegratorKind::GeneralizedAlpha,
             },
             probes: vec![(0.5, 0.5)],
+            method,
         };
         let start = Instant::now();
         match derive_springs(&config, None, &mut |_| {}) {
@@ -209,6 +219,9 @@ fn main() {
                         "  factor {:.4} residual {:.4}",
                         d.frequency_factor, d.fit_residual
                     );
+                    for g in &d.groups {
+                        eprintln!("  {} ({}): scale {:.4}", g.group, g.elements, g.scale);
+                    }
                     if let Some(l) = &d.large_motion {
                         eprintln!(
                             "  static: {:?}; dynamic: {:?}",

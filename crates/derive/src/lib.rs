@@ -69,7 +69,7 @@ pub use evaluation::{
 };
 pub use fit::{FitDofs, FitResult, StiffnessFit, TrustRegionOutcome};
 pub use mass::{distinct_non_null, mass_eigenvalues};
-pub use method::{ElementClasses, LinearMethod, Method};
+pub use method::{ElementClasses, LinearMethod, Method, SpringGroups};
 pub use modal::{
     Band, CONSTANT_REGULARIZATION, ElementPrior, FITTED_MODES, FREQUENCY_WEIGHT, FitGroup,
     GroupFit, MASS_FLOOR, MASS_REGULARIZATION, MIN_HALF_WAVES, ModalFitReport, ModalSolution,
@@ -95,9 +95,10 @@ pub use setup::{
     TimeSettings,
 };
 pub use springs::{
-    CALIBRATION_ITERATIONS, ClassConstant, RIGID_FREQUENCY, RIGID_MODES, SPRING_CLASSES,
-    SPRING_MODES, SPRING_PULL, SpringFrequency, SpringsConfig, SpringsDerivation,
-    TABLE_SPRING_MODES, derive_springs, rule_lattice,
+    BAND_PULL, BAND_SPRING_MODES, CALIBRATION_ITERATIONS, ClassConstant, GroupScale,
+    RIGID_FREQUENCY, RIGID_MODES, SPRING_CLASSES, SPRING_MODES, SPRING_PULL, STEP_HALVINGS,
+    SpringFrequency, SpringsConfig, SpringsDerivation, TABLE_SPRING_MODES, derive_springs,
+    rule_lattice,
 };
 pub use springs_check::{
     BELOW_LIMIT, DynamicRun, LARGE_MOTION, LARGE_MOTION_PERIODS, LOAD_LEVELS, LargeMotion,

@@ -24,6 +24,18 @@ pub enum Method {
     Springs,
 }
 
+/// How the calibration of a spring model from a Kirchhoff–Love shell groups the elements that
+/// share one scale (docs/math.md §11.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SpringGroups {
+    /// One scale per element class ([`Method::Springs`]).
+    Classes,
+    /// One scale per class and band of the lattice along u and v, the groups of the modal
+    /// fit ([`crate::Band`]), fitted to more shell modes ([`Method::Modal`] of a shell).
+    Bands,
+}
+
 /// The element classes a derivation's lattice is built of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ElementClasses {
@@ -68,10 +80,37 @@ impl Method {
         }
     }
 
-    /// True for the derivation of a Kirchhoff–Love shell (the others derive from the
-    /// tension plate).
-    pub fn is_shell(self) -> bool {
-        self == Method::Springs
+    /// The calibration groups of the spring model this derivation makes of a Kirchhoff–Love
+    /// shell; `None` for a derivation that takes only the tension plate.
+    pub fn spring_groups(self) -> Option<SpringGroups> {
+        match self {
+            Method::Springs => Some(SpringGroups::Classes),
+            Method::Modal => Some(SpringGroups::Bands),
+            Method::Paper | Method::Excitation | Method::Reduction => None,
+        }
+    }
+
+    /// True when this derivation takes a Kirchhoff–Love scene (`shell`) or a tension-plate one.
+    pub fn takes(self, shell: bool) -> bool {
+        if shell {
+            self.spring_groups().is_some()
+        } else {
+            self != Method::Springs
+        }
+    }
+
+    /// The derivations that take a Kirchhoff–Love scene (`shell`) or a tension-plate one,
+    /// named and joined for an error message: `"springs" or "modal"`.
+    pub fn names_taking(shell: bool) -> String {
+        let names: Vec<String> = Self::ALL
+            .into_iter()
+            .filter(|m| m.takes(shell))
+            .map(|m| format!("\"{}\"", m.name()))
+            .collect();
+        match names.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => names.join(""),
+        }
     }
 
     /// Parses a [`Method::name`].

@@ -106,7 +106,7 @@ impl Band {
         }
     }
 
-    fn name(self, axis: char) -> String {
+    pub(crate) fn name(self, axis: char) -> String {
         match self {
             Band::Low(d) => format!("{axis}{d}"),
             Band::High(d) => format!("{axis}-{d}"),

@@ -31,7 +31,7 @@
 //!   so that the lowest elastic frequency is the shell's.
 //!   The masses stay the lumped ones (the total mass and the gravity loads stay exact).
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
@@ -42,18 +42,31 @@ use nurbspring_linalg::{DenseMatrix, SparseMatrix, least_squares};
 use nurbspring_msm::{Class, Constants, HingeKind, LatticeOptions, SpringKind, SpringLattice};
 use serde::Serialize;
 
+use crate::modal::Band;
 use crate::springs_check::{self, LargeMotion, SmallMotion, sub};
-use crate::{DeriveError, InitialConditions, TimeSettings, match_modes};
+use crate::{DeriveError, InitialConditions, Method, SpringGroups, TimeSettings, match_modes};
 
-/// The shell modes the calibration fits (fewer when the lattice or the shell has fewer).
+/// The shell modes the calibration by class fits (fewer when the lattice or the shell has
+/// fewer).
 pub const SPRING_MODES: usize = 12;
+/// The shell modes the calibration by class and band fits (as many as by class: on a 9²
+/// lattice the 13th to 24th plate modes are resolved too coarsely to fit).
+pub const BAND_SPRING_MODES: usize = SPRING_MODES;
 /// The modes the frequency table reports.
 pub const TABLE_SPRING_MODES: usize = 6;
 /// Weight of the pull of each log class scale towards its rule value, beside one row of
 /// weight 1 per fitted mode.
 pub const SPRING_PULL: f64 = 0.05;
+/// The same under the calibration by class and band, for a whole class (each group's pull
+/// is its share of the class's elements times this). Weak: the bands near free edges must
+/// move far from the rule to carry what hinges miss there (docs/derivations.md: with
+/// [`SPRING_PULL`] the 9² free-edge plate keeps 3/6 modes within 3 %, with 0.005 6/6 at
+/// +2.3 %, with this 6/6 at +1.8 %).
+pub const BAND_PULL: f64 = 5e-4;
 /// Gauss–Newton iterations of the calibration at most.
 pub const CALIBRATION_ITERATIONS: usize = 12;
+/// Halvings of a Gauss–Newton step that does not lower the calibration's objective, at most.
+pub const STEP_HALVINGS: usize = 4;
 
 /// Rigid-body modes the mode count allows for besides the fitted ones.
 pub const RIGID_MODES: usize = 6;
@@ -90,6 +103,20 @@ pub struct SpringsConfig {
     pub time: TimeSettings,
     /// Probe parameters, the centre first.
     pub probes: Vec<(f64, f64)>,
+    /// The derivation: [`Method::Springs`] (one scale per class) or [`Method::Modal`] (one
+    /// per class and band), [`Method::spring_groups`].
+    pub method: Method,
+}
+
+/// The scale of one calibration group of a modal spring model.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GroupScale {
+    /// `"hinge[u0,vin]"`: the class, then its bands along u and v ([`crate::FitGroup::name`]).
+    pub group: String,
+    /// Its springs or hinges.
+    pub elements: usize,
+    /// The factor on the rule's weights of its elements.
+    pub scale: f64,
 }
 
 /// One row of the frequency table: a shell mode and the spring mode of largest MAC.
@@ -129,6 +156,9 @@ pub struct ClassConstant {
 /// A derived spring model and its validation against the shell.
 #[derive(Clone, Debug, Serialize)]
 pub struct SpringsDerivation {
+    /// The derivation that made it ([`SpringsConfig::method`]).
+    #[serde(skip)]
+    pub method: Method,
     /// The model (constants, weights, masses, damping, fixed nodes; no node forces).
     #[serde(skip)]
     pub lattice: SpringLattice,
@@ -144,6 +174,11 @@ pub struct SpringsDerivation {
     pub total_mass: f64,
     /// Constants by class.
     pub constants: Vec<ClassConstant>,
+    /// The scale of each group of the calibration by class and band (the modal derivation);
+    /// each element's stiffness is its class constant times its weight, the rule's weight
+    /// times its group's scale. Empty for the calibration by class.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<GroupScale>,
     /// The factor that made the lowest frequency the shell's.
     pub frequency_factor: f64,
     /// Shell modes the calibration fitted.
@@ -172,6 +207,17 @@ pub fn derive_springs(
     cancel: Option<Arc<AtomicBool>>,
     stage: &mut dyn FnMut(&str),
 ) -> Result<SpringsDerivation, DeriveError> {
+    let groups = config
+        .method
+        .spring_groups()
+        .ok_or_else(|| DeriveError::InvalidInput {
+            input: crate::Input::Derivation,
+            value: format!("\"{}\"", config.method.name()),
+            reason: format!(
+                "a Kirchhoff–Love shell derives a spring model: {}",
+                Method::names_taking(true)
+            ),
+        })?;
     stage("the shell's modes and the calibration");
     let geometry = Geometry::Surface(config.surface.clone());
     let model = DnurbsModel::kirchhoff_love(
@@ -189,7 +235,7 @@ pub fn derive_springs(
         model.fixed_points(),
     )?;
     let map = springs_check::NodeMap::new(&geometry, &lattice, &model)?;
-    let calibration = calibrate(&model, &mut lattice, &map, &rule)?;
+    let calibration = calibrate(&model, &mut lattice, &map, &rule, groups)?;
     let size = bounding_diagonal(&lattice.positions);
     let node_velocities = map.node_velocities(&config.initial.state(&model));
     let probe_nodes: Vec<usize> = config
@@ -242,6 +288,8 @@ pub fn derive_springs(
         })
         .collect();
     let mut d = SpringsDerivation {
+        method: config.method,
+        groups: calibration.groups,
         total_mass: lattice.masses.iter().sum(),
         lattice,
         node_velocities,
@@ -416,6 +464,165 @@ fn dual_areas(lattice: &SpringLattice, surface: &NurbsSurface) -> Result<Vec<f64
     Ok(out)
 }
 
+/// The calibration's groups: the class of each, its name, and the group of every spring and
+/// hinge.
+struct Grouping {
+    classes: Vec<Class>,
+    names: Vec<String>,
+    springs: Vec<usize>,
+    hinges: Vec<usize>,
+}
+
+impl Grouping {
+    /// The groups of `lattice`'s springs and hinges: their classes, or their classes and bands
+    /// along u and v ([`Band::of`] the lines their nodes span), in order of first appearance.
+    fn new(lattice: &SpringLattice, groups: SpringGroups) -> Self {
+        let grid = lattice.grid.unwrap_or((lattice.n_nodes(), 1));
+        let bands = |nodes: &[usize]| -> Option<(Band, Band)> {
+            if groups == SpringGroups::Classes {
+                return None;
+            }
+            let span = |line: &dyn Fn(usize) -> usize| {
+                let lines = nodes.iter().map(|&a| line(a));
+                (lines.clone().min().unwrap_or(0), lines.max().unwrap_or(0))
+            };
+            let (ulo, uhi) = span(&|a| a / grid.1);
+            let (vlo, vhi) = span(&|a| a % grid.1);
+            Some((Band::of(ulo, uhi, grid.0), Band::of(vlo, vhi, grid.1)))
+        };
+        let mut out = Self {
+            classes: Vec::new(),
+            names: Vec::new(),
+            springs: Vec::new(),
+            hinges: Vec::new(),
+        };
+        let mut index: BTreeMap<(Class, Option<(Band, Band)>), usize> = BTreeMap::new();
+        let mut group_of = |class: Class, nodes: &[usize], out: &mut Self| -> usize {
+            let key = (class, bands(nodes));
+            *index.entry(key).or_insert_with(|| {
+                out.classes.push(class);
+                out.names.push(match key.1 {
+                    None => class.name().to_string(),
+                    Some((u, v)) => format!("{}[{},{}]", class.name(), u.name('u'), v.name('v')),
+                });
+                out.classes.len() - 1
+            })
+        };
+        for s in &lattice.springs {
+            let g = group_of(Class::Spring(s.kind), &[s.a, s.b], &mut out);
+            out.springs.push(g);
+        }
+        for h in &lattice.hinges {
+            let g = group_of(Class::Hinge(h.kind), &h.nodes, &mut out);
+            out.hinges.push(g);
+        }
+        out
+    }
+
+    fn len(&self) -> usize {
+        self.classes.len()
+    }
+
+    /// The elements of group `g`.
+    fn count(&self, g: usize) -> usize {
+        self.springs
+            .iter()
+            .chain(&self.hinges)
+            .filter(|&&h| h == g)
+            .count()
+    }
+
+    /// Group `g`'s share of the elements of its class.
+    fn share(&self, g: usize) -> f64 {
+        let class: usize = (0..self.len())
+            .filter(|&h| self.classes[h] == self.classes[g])
+            .map(|h| self.count(h))
+            .sum();
+        self.count(g) as f64 / class.max(1) as f64
+    }
+
+    /// The unit stiffness of each group at `x` on the free coordinates `rows`.
+    fn units(&self, lattice: &SpringLattice, x: &[f64], rows: &[usize]) -> Vec<SparseMatrix> {
+        (0..self.len())
+            .map(|g| {
+                let mut only = lattice.clone();
+                only.springs = lattice
+                    .springs
+                    .iter()
+                    .zip(&self.springs)
+                    .filter(|&(_, &h)| h == g)
+                    .map(|(s, _)| *s)
+                    .collect();
+                only.hinges = lattice
+                    .hinges
+                    .iter()
+                    .zip(&self.hinges)
+                    .filter(|&(_, &h)| h == g)
+                    .map(|(e, _)| *e)
+                    .collect();
+                only.unit_stiffness(self.classes[g], x)
+                    .submatrix(rows, rows)
+            })
+            .collect()
+    }
+
+    /// Sets the lattice's constants and weights from the group scales `e^σ_g` and the
+    /// frequency factor: a group that is a whole class scales its constant; a group of a
+    /// class and bands scales its elements' weights (from `weights`, the rule's), and the
+    /// class constants are the rule's times the factor.
+    fn apply(
+        &self,
+        lattice: &mut SpringLattice,
+        weights: &(Vec<f64>, Vec<f64>),
+        sigma: &[f64],
+        k0: &[f64],
+        factor: f64,
+        groups: SpringGroups,
+    ) {
+        let by_class = groups == SpringGroups::Classes;
+        let scale = |g: usize| if by_class { 1.0 } else { sigma[g].exp() };
+        for ((s, &g), &w) in lattice
+            .springs
+            .iter_mut()
+            .zip(&self.springs)
+            .zip(&weights.0)
+        {
+            s.weight = w * scale(g);
+        }
+        for ((h, &g), &w) in lattice.hinges.iter_mut().zip(&self.hinges).zip(&weights.1) {
+            h.weight = w * scale(g);
+        }
+        let constant = |g: usize| factor * k0[g] * if by_class { sigma[g].exp() } else { 1.0 };
+        lattice.set_constants(&Constants::from_pairs(
+            (0..self.len()).map(|g| (self.classes[g], constant(g))),
+        ));
+    }
+
+    /// The scale and element count of each group (none for the calibration by class).
+    fn report(&self, sigma: &[f64], groups: SpringGroups) -> Vec<GroupScale> {
+        if groups == SpringGroups::Classes {
+            return Vec::new();
+        }
+        (0..self.len())
+            .map(|g| GroupScale {
+                group: self.names[g].clone(),
+                elements: self.count(g),
+                scale: sigma[g].exp(),
+            })
+            .collect()
+    }
+}
+
+/// The calibration's rows at one set of group scales.
+struct Residuals {
+    /// `(∂ ln ω_i / ∂σ, ln(ω_i / ω_j))` of each matched mode.
+    rows: Vec<(Vec<f64>, f64)>,
+    /// RMS of the log ratios.
+    rms: f64,
+    /// The fitted mode count times their mean square, plus the squared pulls.
+    objective: f64,
+}
+
 /// The calibration's outcome.
 struct Calibration {
     omega1: f64,
@@ -427,18 +634,24 @@ struct Calibration {
     fitted: usize,
     residual: f64,
     table: Vec<SpringFrequency>,
+    groups: Vec<GroupScale>,
 }
 
-/// Fits the class scales to the shell's lowest modes, makes the lowest frequency exact, and
+/// Fits the group scales to the shell's lowest modes, makes the lowest frequency exact, and
 /// tabulates the lowest modes matched by MAC (module docs).
 fn calibrate(
     model: &DnurbsModel,
     lattice: &mut SpringLattice,
     map: &springs_check::NodeMap,
     rule: &Constants,
+    groups: SpringGroups,
 ) -> Result<Calibration, DeriveError> {
     let n_free = map.free_rows().len();
-    let wanted = SPRING_MODES.min(model.n_free()).min(n_free);
+    let (fitted_modes, pull_weight) = match groups {
+        SpringGroups::Classes => (SPRING_MODES, SPRING_PULL),
+        SpringGroups::Bands => (BAND_SPRING_MODES, BAND_PULL),
+    };
+    let wanted = fitted_modes.min(model.n_free()).min(n_free);
     if wanted == 0 {
         return Err(DeriveError::InvalidInput {
             input: crate::Input::Constraints,
@@ -469,18 +682,17 @@ fn calibrate(
         .map(|&j| map.sample_free(&modes.vectors.column(j)))
         .collect();
     let x0 = lattice.flat_positions();
-    let units: Vec<SparseMatrix> = SPRING_CLASSES
-        .iter()
-        .map(|&c| {
-            lattice
-                .unit_stiffness(c, &x0)
-                .submatrix(map.free_rows(), map.free_rows())
-        })
-        .collect();
+    let grouping = Grouping::new(lattice, groups);
+    let units = grouping.units(lattice, &x0, map.free_rows());
+    let weights: (Vec<f64>, Vec<f64>) = (
+        lattice.springs.iter().map(|s| s.weight).collect(),
+        lattice.hinges.iter().map(|h| h.weight).collect(),
+    );
     let masses = map.free_masses(lattice);
     let fitted = wanted.min(omega.len());
-    let n_c = SPRING_CLASSES.len();
-    let k0: Vec<f64> = SPRING_CLASSES
+    let n_c = grouping.len();
+    let k0: Vec<f64> = grouping
+        .classes
         .iter()
         .map(|&c| rule.get(c).unwrap_or(0.0))
         .collect();
@@ -492,13 +704,17 @@ fn calibrate(
         Ok(k)
     };
     let n_modes = rigid.len() + 2 * fitted + RIGID_MODES;
-    let pull = SPRING_PULL.sqrt();
-    // Gauss–Newton on the log frequency ratios of the matched modes in the log class scales
-    // σ (k_c = k⁰_c e^σ_c), with ∂ ln ω_i / ∂σ_c = k_c ψ_iᵀ G_c ψ_i / (2 ω_i² ψ_iᵀ M ψ_i).
-    let mut sigma = vec![0.0; n_c];
-    let mut best = (f64::INFINITY, sigma.clone());
-    for _ in 0..CALIBRATION_ITERATIONS {
-        let k = stiffness(&sigma)?;
+    // Each group's pull weighs its share of its class's elements, so that one scale on a
+    // whole class costs the same under either grouping.
+    let pull: Vec<f64> = (0..n_c)
+        .map(|g| (pull_weight * grouping.share(g)).sqrt())
+        .collect();
+    // Gauss–Newton on the log frequency ratios of the matched modes in the log group scales
+    // σ (k_c = k⁰_c e^σ_c), with ∂ ln ω_i / ∂σ_c = k_c ψ_iᵀ G_c ψ_i / (2 ω_i² ψ_iᵀ M ψ_i);
+    // a step that does not lower the objective (the mean square of the rows over the fitted
+    // modes plus the pulls) is halved, and the calibration ends where halving does not help.
+    let residuals = |sigma: &[f64]| -> Result<Residuals, DeriveError> {
+        let k = stiffness(sigma)?;
         let (w, shapes) = springs_check::lowest_modes(&k, &masses, n_modes)?;
         let matches = match_modes(&sampled[..fitted], &omega[..fitted], &shapes);
         let mut rows: Vec<(Vec<f64>, f64)> = Vec::new();
@@ -517,12 +733,24 @@ fn calibrate(
                 .collect();
             rows.push((grad, (w[i] / omega[j]).ln()));
         }
+        let mean_square = rows.iter().map(|(_, r)| r * r).sum::<f64>() / rows.len().max(1) as f64;
+        let pulled: f64 = sigma.iter().zip(&pull).map(|(s, p)| (p * s).powi(2)).sum();
+        Ok(Residuals {
+            rms: mean_square.sqrt(),
+            objective: fitted as f64 * mean_square + pulled,
+            rows,
+        })
+    };
+    let mut sigma = vec![0.0; n_c];
+    let mut current = residuals(&sigma)?;
+    let mut best = (f64::INFINITY, sigma.clone());
+    for _ in 0..CALIBRATION_ITERATIONS {
+        let rows = &current.rows;
         if rows.is_empty() {
             break;
         }
-        let rms = (rows.iter().map(|(_, r)| r * r).sum::<f64>() / rows.len() as f64).sqrt();
-        if rms < best.0 {
-            best = (rms, sigma.clone());
+        if current.rms < best.0 {
+            best = (current.rms, sigma.clone());
         }
         let mut a = DenseMatrix::zeros(rows.len() + n_c, n_c);
         let mut b = vec![0.0; rows.len() + n_c];
@@ -533,27 +761,34 @@ fn calibrate(
             b[r] = -res;
         }
         for c in 0..n_c {
-            a[(rows.len() + c, c)] = pull;
-            b[rows.len() + c] = -pull * sigma[c];
+            a[(rows.len() + c, c)] = pull[c];
+            b[rows.len() + c] = -pull[c] * sigma[c];
         }
         let step = least_squares(&a, &b)?;
         let largest = step.iter().fold(0.0_f64, |m, d| m.max(d.abs()));
-        let cut = if largest > 1.0 { 1.0 / largest } else { 1.0 };
-        sigma.iter_mut().zip(&step).for_each(|(s, d)| *s += cut * d);
+        let mut cut = if largest > 1.0 { 1.0 / largest } else { 1.0 };
+        let mut accepted = None;
+        for _ in 0..=STEP_HALVINGS {
+            let trial: Vec<f64> = sigma.iter().zip(&step).map(|(s, d)| s + cut * d).collect();
+            let r = residuals(&trial)?;
+            if r.objective < current.objective {
+                accepted = Some((trial, r));
+                break;
+            }
+            cut *= 0.5;
+        }
+        let Some((trial, r)) = accepted else { break };
+        sigma = trial;
+        current = r;
         if largest < 1e-4 {
             break;
         }
     }
+    if !current.rows.is_empty() && current.rms < best.0 {
+        best = (current.rms, sigma.clone());
+    }
     let (residual, sigma) = best;
-    let scaled = |factor: f64| {
-        Constants::from_pairs(
-            SPRING_CLASSES
-                .iter()
-                .enumerate()
-                .map(|(c, &class)| (class, factor * sigma[c].exp() * k0[c])),
-        )
-    };
-    lattice.set_constants(&scaled(1.0));
+    grouping.apply(lattice, &weights, &sigma, &k0, 1.0, groups);
     let k = map.free_stiffness(lattice);
     let (msm_low, _) = springs_check::lowest_modes(&k, &masses, rigid.len() + RIGID_MODES)?;
     let omega1_msm = msm_low.into_iter().find(|&w| is_elastic(w)).unwrap_or(0.0);
@@ -566,7 +801,7 @@ fn calibrate(
         });
     }
     let factor = (omega1 / omega1_msm).powi(2);
-    lattice.set_constants(&scaled(factor));
+    grouping.apply(lattice, &weights, &sigma, &k0, factor, groups);
     let k = map.free_stiffness(lattice);
     let (omega_msm, shapes) =
         springs_check::lowest_modes(&k, &masses, rigid.len() + 3 * TABLE_SPRING_MODES)?;
@@ -593,6 +828,7 @@ fn calibrate(
         fitted,
         residual,
         table,
+        groups: grouping.report(&sigma, groups),
     })
 }
 

@@ -1,10 +1,10 @@
 //! The spring derivation of a Kirchhoff–Love shell (docs/math.md §11): the energy-equivalence
 //! rules against the plane-stress sheet and the plate, and the derived model's invariants
 //! (stress-free at rest, rigid motion, lowest frequency, mass) and its large-motion accuracy
-//! on Sze's cantilever.
+//! on Sze's cantilever; the modal derivation's calibration by class and band.
 
 use nurbspring_derive::{
-    InitialConditions, SpringsConfig, TimeSettings, derive_springs, rule_lattice,
+    InitialConditions, Method, SpringsConfig, TimeSettings, derive_springs, rule_lattice,
 };
 use nurbspring_dnurbs::obstacle::{cylinder_sector, rectangle, refined};
 use nurbspring_dnurbs::{
@@ -137,6 +137,7 @@ fn clamped_plate_config(surface: nurbspring_geom::NurbsSurface) -> SpringsConfig
             msm_integrator: IntegratorKind::Newmark,
         },
         probes: vec![(0.5, 0.5)],
+        method: Method::Springs,
     }
 }
 
@@ -219,6 +220,74 @@ fn sze_cantilever_nodes_follow_the_shell_at_every_load_level() {
     }
     assert!(large.largest_displacement.unwrap() > 0.7);
     assert!(d.small_motion.relative_rms < 0.03, "{:?}", d.small_motion);
+}
+
+/// The modal derivation of a shell calibrates one scale per class and band: every spring and
+/// hinge is in one group, the model stays stress-free at rest and under rigid motion, the
+/// masses and the lowest frequency stay exact, and the finer groups fit the shell's modes at
+/// least as closely as four class constants do (the free-edge plate, whose hinges miss the
+/// plate's coupling term near the free edges).
+#[test]
+fn the_modal_derivation_of_a_shell_fits_its_modes_by_band() {
+    let mut config = clamped_plate_config(refined(&rectangle(0.4, 0.3), 3, (3, 3)).unwrap());
+    config.loads = Loads::default();
+    let springs = derive_springs(&config, None, &mut |_| {}).unwrap();
+    config.method = Method::Modal;
+    let d = derive_springs(&config, None, &mut |_| {}).unwrap();
+    assert_eq!(d.method, Method::Modal);
+    assert!(springs.groups.is_empty());
+    let lattice = &d.lattice;
+    let grouped: usize = d.groups.iter().map(|g| g.elements).sum();
+    assert_eq!(grouped, lattice.springs.len() + lattice.hinges.len());
+    assert!(d.groups.len() > 4, "{} groups", d.groups.len());
+    assert!(
+        d.groups
+            .iter()
+            .all(|g| g.scale > 0.0 && g.scale.is_finite())
+    );
+    // The scales vary by band (else the grouping would be the class one).
+    let spread = d.groups.iter().map(|g| g.scale).fold(0.0_f64, f64::max)
+        / d.groups
+            .iter()
+            .map(|g| g.scale)
+            .fold(f64::INFINITY, f64::min);
+    assert!(spread > 1.01, "{spread}");
+    let scale: f64 = lattice
+        .springs
+        .iter()
+        .map(|s| s.stiffness() * s.rest_length)
+        .fold(0.0, f64::max);
+    let mut f = vec![0.0; 3 * lattice.n_nodes()];
+    lattice.elastic_forces(&lattice.flat_positions(), &mut f);
+    let rest = f.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    lattice.elastic_forces(&moved(lattice, rotate), &mut f);
+    let rigid = f.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    assert!(rest <= 1e-12 * scale, "at rest: {rest:e} (scale {scale:e})");
+    assert!(
+        rigid <= 1e-9 * scale,
+        "rotated: {rigid:e} (scale {scale:e})"
+    );
+    assert!(d.frequencies[0].relative_error.unwrap().abs() < 1e-9);
+    assert_eq!(d.total_mass, springs.total_mass);
+    assert!(
+        d.fit_residual <= springs.fit_residual,
+        "by band {} against by class {}",
+        d.fit_residual,
+        springs.fit_residual
+    );
+}
+
+/// The paper's derivation (and the others of the tension plate) is refused for a shell.
+#[test]
+fn a_shell_refuses_a_derivation_of_the_tension_plate() {
+    let mut config = clamped_plate_config(refined(&rectangle(0.4, 0.3), 3, (1, 1)).unwrap());
+    for method in [Method::Paper, Method::Excitation, Method::Reduction] {
+        config.method = method;
+        let e = derive_springs(&config, None, &mut |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("\"modal\" or \"springs\""), "{e}");
+    }
 }
 
 /// The lattice's load path on a von Mises truss: two springs k from the fixed nodes (∓1, 0, 0)

@@ -337,7 +337,9 @@ impl Scene {
 
     /// The spring derivation's configuration (docs/math.md §11), or the error for a
     /// tension-plate scene.
-    pub fn springs_config(&self) -> Result<SpringsConfig, Error> {
+    /// `method` is the derivation `key` chose: one that takes a shell
+    /// ([`Method::spring_groups`]).
+    pub fn springs_config(&self, method: Method, key: &str) -> Result<SpringsConfig, Error> {
         let Some(shell) = self.material.shell() else {
             return Err(Error::refused(
                 &self.path,
@@ -349,6 +351,20 @@ impl Scene {
                     .to_string(),
             ));
         };
+        if !method.takes(true) {
+            return Err(Error::refused(
+                &self.path,
+                Some(key),
+                key,
+                format!("\"{}\"", method.name()),
+                format!(
+                    "a Kirchhoff–Love scene derives rest-length springs and hinges: {} (the \
+                     {} derivation takes the tension plate)",
+                    Method::names_taking(true),
+                    method.name()
+                ),
+            ));
+        }
         let surface = self.to_surface()?;
         Ok(SpringsConfig {
             surface,
@@ -360,6 +376,7 @@ impl Scene {
             initial: self.initial_conditions(),
             time: self.time_settings(),
             probes: self.probe_params()?,
+            method,
         })
     }
 

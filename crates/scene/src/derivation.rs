@@ -47,6 +47,13 @@ impl Scene {
         }
     }
 
+    /// True when `choice` derives a spring model from a Kirchhoff–Love shell
+    /// ([`crate::springs_report::derive_springs`]): every derivation of a shell scene, and
+    /// `springs` of any (the tension plate's is refused there, naming `material.model`).
+    pub fn derives_springs(&self, choice: &DerivationChoice) -> bool {
+        choice.method == Method::Springs || self.material.shell().is_some()
+    }
+
     /// The derivation `choice` of this scene, configured and ready to run.
     pub fn prepare_derivation(
         &self,

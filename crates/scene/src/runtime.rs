@@ -85,7 +85,26 @@ impl Scene {
         };
         let dnurbs_run = DNURBS_SOLVE * steps * points * band;
         let mut at_least = false;
+        let shell = self.material.shell().is_some();
         let mut terms: Vec<(f64, String)> = match method {
+            // A shell's derivations make a spring model (docs/math.md §11).
+            _ if shell && method.takes(true) => {
+                let element = ((s.p + 1.0) * (s.q + 1.0)).powi(3);
+                let iterations = LOAD_LEVELS as f64 * SHELL_ITERATIONS_PER_LEVEL
+                    + LARGE_MOTION_PERIODS * STEPS_PER_PERIOD as f64 * SHELL_ITERATIONS_PER_STEP;
+                vec![
+                    (
+                        iterations * SHELL_ITERATION * points * element,
+                        format!(
+                            "the shell's large-motion runs (about {iterations:.0} Newton iterations on {points} control points)"
+                        ),
+                    ),
+                    (
+                        modes(3.0 * nodes),
+                        format!("the spring model's modes ({nodes} nodes)"),
+                    ),
+                ]
+            }
             Method::Modal | Method::Excitation => {
                 let n = points.max(nodes);
                 let fits = if method == Method::Excitation {
@@ -146,23 +165,8 @@ impl Scene {
                 }
                 terms
             }
-            Method::Springs => {
-                let element = ((s.p + 1.0) * (s.q + 1.0)).powi(3);
-                let iterations = LOAD_LEVELS as f64 * SHELL_ITERATIONS_PER_LEVEL
-                    + LARGE_MOTION_PERIODS * STEPS_PER_PERIOD as f64 * SHELL_ITERATIONS_PER_STEP;
-                vec![
-                    (
-                        iterations * SHELL_ITERATION * points * element,
-                        format!(
-                            "the shell's large-motion runs (about {iterations:.0} Newton iterations on {points} control points)"
-                        ),
-                    ),
-                    (
-                        modes(3.0 * nodes),
-                        format!("the spring model's modes ({nodes} nodes)"),
-                    ),
-                ]
-            }
+            // Refused on a tension plate (no spring model without a shell).
+            Method::Springs => Vec::new(),
         };
         terms.sort_by(|x, y| y.0.total_cmp(&x.0));
         let seconds: f64 = terms.iter().map(|t| t.0).sum();
@@ -211,7 +215,7 @@ impl Scene {
         let (method, _) = self.derivation();
         let mut map = serde_json::Map::new();
         let mut methods = vec![method];
-        if method != Method::Paper && !method.is_shell() {
+        if method != Method::Paper && method.takes(false) && self.material.shell().is_none() {
             methods.push(Method::Paper);
         }
         for m in methods {

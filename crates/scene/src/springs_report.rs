@@ -14,16 +14,17 @@ use serde::Serialize;
 
 use crate::export::{write_lattice_obj, write_lattice_vtu};
 use crate::msm_file::msm_file;
-use crate::{Error, Scene};
+use crate::{DerivationChoice, Error, Scene};
 
 /// Derives the spring model of a Kirchhoff–Love scene; errors name the scene key they come
 /// from. `stage` is told each stage as it begins.
 pub fn derive_springs(
     scene: &Scene,
+    choice: &DerivationChoice,
     cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
     stage: &mut dyn FnMut(&str),
 ) -> Result<SpringsDerivation, Error> {
-    let config = scene.springs_config()?;
+    let config = scene.springs_config(choice.method, choice.key)?;
     nurbspring_derive::derive_springs(&config, cancel, stage)
         .map_err(|e| scene.derive_error(crate::derivation::DERIVATION_KEY, e))
 }
@@ -46,7 +47,7 @@ impl<'a> SpringsReport<'a> {
     pub fn new(scene_label: &'a str, d: &'a SpringsDerivation) -> Self {
         Self {
             scene: scene_label,
-            derivation: "springs",
+            derivation: d.method.name(),
             nodes: d.lattice.n_nodes(),
             springs: d.lattice.springs.len(),
             hinges: d.lattice.hinges.len(),
@@ -144,7 +145,11 @@ fn write_markdown(out: &Path, scene_label: &str, d: &SpringsDerivation) -> Resul
 /// report.md of a spring derivation.
 pub fn springs_markdown(scene_label: &str, d: &SpringsDerivation) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# Spring model of {scene_label}\n");
+    let _ = writeln!(
+        s,
+        "# Spring model of {scene_label} (derivation `{}`)\n",
+        d.method.name()
+    );
     let _ = writeln!(s, "**Verdict.** {}.\n", d.verdict);
     let _ = writeln!(
         s,
@@ -168,9 +173,25 @@ pub fn springs_markdown(scene_label: &str, d: &SpringsDerivation) -> String {
             c.class, c.count, c.rule, c.calibrated
         );
     }
+    let groups = if d.groups.is_empty() {
+        "one scale per class".to_string()
+    } else {
+        let (lo, hi) = d
+            .groups
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(lo, hi), g| {
+                (lo.min(g.scale), hi.max(g.scale))
+            });
+        format!(
+            "one scale per class and band of the lattice ({} groups, scales {lo:.4} to {hi:.4}, \
+             each in report.json `groups`; an element's stiffness is its class constant times \
+             the rule's weight times its group's scale)",
+            d.groups.len()
+        )
+    };
     let _ = writeln!(
         s,
-        "\nCalibrated on the shell's lowest {} modes (Gauss–Newton on the log frequency ratios of the modes matched by MAC, RMS {:.3e}); \
+        "\nCalibrated on the shell's lowest {} modes with {groups} (Gauss–Newton on the log frequency ratios of the modes matched by MAC, RMS {:.3e}); \
          every constant then times {:.6} for the exact lowest frequency.\n",
         d.fitted_modes, d.fit_residual, d.frequency_factor
     );

@@ -214,14 +214,20 @@ pub(crate) fn build_scene(
     check_simulation(&simulation, &material, &dnurbs, info.as_ref(), &mut p);
     let shell = material.shell().is_some();
     let method = raw.fit.derivation_for(shell, &dnurbs, &raw.constraints).0;
-    if shell != method.is_shell() {
+    if !method.takes(shell) {
         p.push(
             "fit.derivation",
             format!("\"{}\"", method.name()),
             if shell {
-                "a Kirchhoff–Love scene derives rest-length springs and hinges: fit.derivation = \"springs\" (or leave it out)"
+                format!(
+                    "a Kirchhoff–Love scene derives rest-length springs and hinges: fit.derivation = {} (or leave it out)",
+                    Method::names_taking(true)
+                )
             } else {
-                "the spring derivation needs a shell: material.model = \"kirchhoff-love\" (the tension plate derives modal, excitation, reduction or paper)"
+                format!(
+                    "the spring derivation needs a shell: material.model = \"kirchhoff-love\" (the tension plate derives {})",
+                    Method::names_taking(false)
+                )
             },
         );
     }

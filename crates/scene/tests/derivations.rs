@@ -265,7 +265,7 @@ fn every_derivation_carries_the_material_damping() {
     let text = text.replace("t_end = 20.0", "t_end = 1.0");
     let s = Scene::from_str(&text, "damped.toml").unwrap();
     // Every derivation of the tension plate (the shell's, springs, has its own tests).
-    for method in Method::ALL.into_iter().filter(|m| !m.is_shell()) {
+    for method in Method::ALL.into_iter().filter(|m| m.takes(false)) {
         let d = derive(&s, method);
         match (d.lattice(), d.reduction()) {
             (Some(l), _) => {
@@ -359,6 +359,31 @@ fn derivation_refusals_name_the_key() {
         std::fs::read_to_string(s.path.clone()).unwrap() + "\n[msm]\nelements = [\"twist\"]\n";
     let e = Scene::from_str(&text, "twisted.toml").unwrap_err();
     assert!(e.to_string().contains("msm.elements"), "{e}");
+}
+
+/// A shell scene takes `springs` or `modal` in `fit.derivation`; the others are refused naming
+/// the key and the derivations it takes.
+#[test]
+fn a_shell_scene_takes_springs_or_modal() {
+    let cloth = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cloth_corners.toml"),
+    )
+    .unwrap();
+    let with = |name: &str| format!("{cloth}\n[fit]\nderivation = \"{name}\"\n");
+    for method in [Method::Springs, Method::Modal] {
+        let s = Scene::from_str(&with(method.name()), "cloth.toml").unwrap();
+        assert_eq!(s.derivation().0, method);
+        assert!(s.derives_springs(&s.choose_derivation(None)));
+    }
+    for method in [Method::Paper, Method::Excitation, Method::Reduction] {
+        let e = Scene::from_str(&with(method.name()), "cloth.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("fit.derivation") && e.contains("\"modal\" or \"springs\""),
+            "{e}"
+        );
+    }
 }
 
 /// A scene the linear derivations cannot take falls back to the paper's unless one is named.

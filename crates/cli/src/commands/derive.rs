@@ -3,9 +3,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use nurbspring_scene::Method;
-use nurbspring_scene::Scene;
 use nurbspring_scene::report::{derivation_line, write_derivation};
+use nurbspring_scene::{DerivationChoice, Method, Scene};
 
 use crate::progress::Progress;
 use nurbspring_scene::resources::Job;
@@ -43,8 +42,8 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
     let choice = scene.choose_derivation(args.derivation.map(|m| (m, "--derivation")));
     ctx.check_resources(&scene, Job::Derive(choice.method), Some(&args.out))?;
-    if choice.method == Method::Springs {
-        return run_springs(ctx, &args, &scene);
+    if scene.derives_springs(&choice) {
+        return run_springs(ctx, &args, &scene, &choice);
     }
     let prepared = scene.prepare_derivation(choice)?;
     let staged = stage_out_dir(&args.out)?;
@@ -70,11 +69,17 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
 }
 
 /// The spring derivation of a Kirchhoff–Love scene (docs/math.md §11).
-fn run_springs(ctx: &Context, args: &DeriveArgs, scene: &Scene) -> CmdResult {
+fn run_springs(
+    ctx: &Context,
+    args: &DeriveArgs,
+    scene: &Scene,
+    choice: &DerivationChoice,
+) -> CmdResult {
     let staged = stage_out_dir(&args.out)?;
     let bar = Progress::new(ctx.global.quiet, "spring derivation", 1);
     let d = nurbspring_scene::springs_report::derive_springs(
         scene,
+        choice,
         Some(ctx.cancel.clone()),
         &mut |stage| bar.set_message(&format!("spring derivation, {stage}")),
     )?;
@@ -86,7 +91,8 @@ fn run_springs(ctx: &Context, args: &DeriveArgs, scene: &Scene) -> CmdResult {
         print_report(&out)?;
     } else {
         println!(
-            "derived spring model (springs): {} nodes, {} springs, {} hinges; {}",
+            "derived spring model ({}): {} nodes, {} springs, {} hinges; {}",
+            d.method.name(),
             d.lattice.n_nodes(),
             d.lattice.springs.len(),
             d.lattice.hinges.len(),
