@@ -190,36 +190,47 @@ fn cloth_derives_springs_and_hinges_that_simulate() {
         .success();
 }
 
-/// `derive --derivation modal` of a shell makes the same springs and hinges with one scale per
-/// class and band, reported as groups; a derivation of the tension plate is refused naming the
-/// option.
+/// `derive --derivation modal` (and `excitation`) of a shell makes the same springs and hinges
+/// with one scale per class and band, reported as groups (and the excited modes it fitted); a
+/// derivation of the tension plate is refused naming the option.
 #[test]
 fn a_shell_derives_modal_springs_and_refuses_the_paper() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("m");
-    bin()
-        .arg("derive")
-        .arg(example("cloth_corners.toml"))
-        .arg("--derivation")
-        .arg("modal")
-        .arg("--out")
-        .arg(&out)
-        .assert()
-        .success();
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    assert_eq!(null_in(&report, "report"), None);
-    assert_eq!(report["derivation"], "modal");
-    let groups = report["groups"].as_array().unwrap();
-    let grouped: u64 = groups.iter().map(|g| g["elements"].as_u64().unwrap()).sum();
-    assert_eq!(
-        grouped,
-        report["springs"].as_u64().unwrap() + report["hinges"].as_u64().unwrap()
-    );
-    let first = report["frequencies"][0]["relative_error"].as_f64().unwrap();
-    assert!(first.abs() < 1e-9, "{first}");
-    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(md.contains("modal"), "{md}");
+    for name in ["modal", "excitation"] {
+        let out = dir.path().join(name);
+        bin()
+            .arg("derive")
+            .arg(example("cloth_corners.toml"))
+            .arg("--derivation")
+            .arg(name)
+            .arg("--out")
+            .arg(&out)
+            .assert()
+            .success();
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        assert_eq!(null_in(&report, "report"), None);
+        assert_eq!(report["derivation"], name);
+        let groups = report["groups"].as_array().unwrap();
+        let grouped: u64 = groups.iter().map(|g| g["elements"].as_u64().unwrap()).sum();
+        assert_eq!(
+            grouped,
+            report["springs"].as_u64().unwrap() + report["hinges"].as_u64().unwrap()
+        );
+        let first = report["frequencies"][0]["relative_error"].as_f64().unwrap();
+        assert!(first.abs() < 1e-9, "{first}");
+        let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+        assert!(md.contains(&format!("(derivation `{name}`)")), "{md}");
+        // The cloth's gravity moves its elastic modes: the excitation derivation lists them.
+        assert_eq!(
+            report["excited_modes"]
+                .as_array()
+                .is_some_and(|m| !m.is_empty()),
+            name == "excitation",
+            "{report}"
+        );
+    }
     let refused = bin()
         .arg("derive")
         .arg(example("cloth_corners.toml"))
@@ -231,7 +242,7 @@ fn a_shell_derives_modal_springs_and_refuses_the_paper() {
         .code(2);
     let err = String::from_utf8_lossy(&refused.get_output().stderr).to_string();
     assert!(
-        err.contains("--derivation") && err.contains("\"modal\" or \"springs\""),
+        err.contains("--derivation") && err.contains("\"modal\", \"excitation\" or \"springs\""),
         "{err}"
     );
     assert!(!dir.path().join("p").exists());

@@ -46,6 +46,13 @@ pub struct ExcitationSolution {
     pub warnings: Vec<String>,
 }
 
+/// The squared amplitude of one mode's motion along one direction (docs/math.md §8.4): with
+/// `e0 = φᵀ M u₀`, `e1 = φᵀ M v₀` and `g = φᵀ f` of an M-orthonormal mode `φ` of eigenvalue
+/// `λ = ω²`, `(e0 − g/λ)² + (e1/ω)²`.
+pub(crate) fn amplitude2(e0: f64, e1: f64, g: f64, lambda: f64, omega: f64) -> f64 {
+    (e0 - g / lambda).powi(2) + (e1 / omega).powi(2)
+}
+
 /// The modes of `L x = ω² diag(m) x`, lowest `count`.
 fn msm_modes(
     l: &SparseMatrix,
@@ -104,9 +111,7 @@ pub fn excitation_fit(
         let (e0, e1) = (mass_dot(&sys.displacement, i), mass_dot(&sys.velocity, i));
         let phi = basis.mode(i);
         let g: [f64; 3] = [0, 1, 2].map(|x| phi.iter().zip(&sys.load).map(|(p, f)| p * f[x]).sum());
-        let a2: f64 = (0..3)
-            .map(|x| (e0[x] - g[x] / l).powi(2) + (e1[x] / w).powi(2))
-            .sum();
+        let a2: f64 = (0..3).map(|x| amplitude2(e0[x], e1[x], g[x], l, w)).sum();
         amplitude.push((i, a2));
     }
     let total: f64 = amplitude.iter().map(|a| a.1).sum();

@@ -95,10 +95,10 @@ pub use setup::{
     TimeSettings,
 };
 pub use springs::{
-    BAND_PULL, BAND_SPRING_MODES, CALIBRATION_ITERATIONS, ClassConstant, GroupScale,
-    RIGID_FREQUENCY, RIGID_MODES, SPRING_CLASSES, SPRING_MODES, SPRING_PULL, STEP_HALVINGS,
-    SpringFrequency, SpringsConfig, SpringsDerivation, TABLE_SPRING_MODES, derive_springs,
-    rule_lattice,
+    BAND_PULL, BAND_SPRING_MODES, CALIBRATION_ITERATIONS, ClassConstant, EXCITATION_CANDIDATES,
+    ExcitedMode, GroupScale, RIGID_FREQUENCY, RIGID_MODES, SPRING_CLASSES, SPRING_MODES,
+    SPRING_PULL, STEP_HALVINGS, SpringFrequency, SpringsConfig, SpringsDerivation,
+    TABLE_SPRING_MODES, derive_springs, rule_lattice,
 };
 pub use springs_check::{
     BELOW_LIMIT, DynamicRun, LARGE_MOTION, LARGE_MOTION_PERIODS, LOAD_LEVELS, LargeMotion,

@@ -32,7 +32,7 @@ pub enum SpringGroups {
     /// One scale per element class ([`Method::Springs`]).
     Classes,
     /// One scale per class and band of the lattice along u and v, the groups of the modal
-    /// fit ([`crate::Band`]), fitted to more shell modes ([`Method::Modal`] of a shell).
+    /// fit ([`crate::Band`]) ([`Method::Modal`] and [`Method::Excitation`] of a shell).
     Bands,
 }
 
@@ -85,8 +85,8 @@ impl Method {
     pub fn spring_groups(self) -> Option<SpringGroups> {
         match self {
             Method::Springs => Some(SpringGroups::Classes),
-            Method::Modal => Some(SpringGroups::Bands),
-            Method::Paper | Method::Excitation | Method::Reduction => None,
+            Method::Modal | Method::Excitation => Some(SpringGroups::Bands),
+            Method::Paper | Method::Reduction => None,
         }
     }
 

@@ -42,6 +42,7 @@ use nurbspring_linalg::{DenseMatrix, SparseMatrix, least_squares};
 use nurbspring_msm::{Class, Constants, HingeKind, LatticeOptions, SpringKind, SpringLattice};
 use serde::Serialize;
 
+use crate::excitation::{EXCITED_MODES, amplitude2};
 use crate::modal::Band;
 use crate::springs_check::{self, LargeMotion, SmallMotion, sub};
 use crate::{DeriveError, InitialConditions, Method, SpringGroups, TimeSettings, match_modes};
@@ -63,6 +64,8 @@ pub const SPRING_PULL: f64 = 0.05;
 /// [`SPRING_PULL`] the 9² free-edge plate keeps 3/6 modes within 3 %, with 0.005 6/6 at
 /// +2.3 %, with this 6/6 at +1.8 %).
 pub const BAND_PULL: f64 = 5e-4;
+/// The shell's elastic modes the excitation derivation chooses its [`EXCITED_MODES`] from.
+pub const EXCITATION_CANDIDATES: usize = 2 * SPRING_MODES;
 /// Gauss–Newton iterations of the calibration at most.
 pub const CALIBRATION_ITERATIONS: usize = 12;
 /// Halvings of a Gauss–Newton step that does not lower the calibration's objective, at most.
@@ -106,6 +109,18 @@ pub struct SpringsConfig {
     /// The derivation: [`Method::Springs`] (one scale per class) or [`Method::Modal`] (one
     /// per class and band), [`Method::spring_groups`].
     pub method: Method,
+}
+
+/// A shell mode the excitation derivation fits.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ExcitedMode {
+    /// Shell mode (1-based, rigid modes counted).
+    pub mode: usize,
+    /// Its angular frequency [rad/s].
+    pub omega: f64,
+    /// Its share `a_j² / Σ a²` of the motion the scene's initial state and loads excite
+    /// (docs/math.md §8.4), over the modes fitted.
+    pub share: f64,
 }
 
 /// The scale of one calibration group of a modal spring model.
@@ -179,6 +194,10 @@ pub struct SpringsDerivation {
     /// times its group's scale. Empty for the calibration by class.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub groups: Vec<GroupScale>,
+    /// The shell modes the excitation derivation fitted, with their shares of the motion
+    /// (empty for the others, which fit the lowest).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub excited_modes: Vec<ExcitedMode>,
     /// The factor that made the lowest frequency the shell's.
     pub frequency_factor: f64,
     /// Shell modes the calibration fitted.
@@ -235,7 +254,9 @@ pub fn derive_springs(
         model.fixed_points(),
     )?;
     let map = springs_check::NodeMap::new(&geometry, &lattice, &model)?;
-    let calibration = calibrate(&model, &mut lattice, &map, &rule, groups)?;
+    // The excitation derivation fits the modes the scene's own excitation moves.
+    let excitation = (config.method == Method::Excitation).then_some(&config.initial);
+    let calibration = calibrate(&model, &mut lattice, &map, &rule, groups, excitation)?;
     let size = bounding_diagonal(&lattice.positions);
     let node_velocities = map.node_velocities(&config.initial.state(&model));
     let probe_nodes: Vec<usize> = config
@@ -290,6 +311,7 @@ pub fn derive_springs(
     let mut d = SpringsDerivation {
         method: config.method,
         groups: calibration.groups,
+        excited_modes: calibration.excited,
         total_mass: lattice.masses.iter().sum(),
         lattice,
         node_velocities,
@@ -635,6 +657,7 @@ struct Calibration {
     residual: f64,
     table: Vec<SpringFrequency>,
     groups: Vec<GroupScale>,
+    excited: Vec<ExcitedMode>,
 }
 
 /// Fits the group scales to the shell's lowest modes, makes the lowest frequency exact, and
@@ -645,6 +668,7 @@ fn calibrate(
     map: &springs_check::NodeMap,
     rule: &Constants,
     groups: SpringGroups,
+    excitation: Option<&InitialConditions>,
 ) -> Result<Calibration, DeriveError> {
     let n_free = map.free_rows().len();
     let (fitted_modes, pull_weight) = match groups {
@@ -659,7 +683,12 @@ fn calibrate(
             reason: "the spring lattice has no free node".into(),
         });
     }
-    let modes = model.modes((wanted + RIGID_MODES).min(model.n_free()))?;
+    let computed = if excitation.is_some() {
+        EXCITATION_CANDIDATES.max(wanted)
+    } else {
+        wanted
+    };
+    let modes = model.modes((computed + RIGID_MODES).min(model.n_free()))?;
     let top = modes.omega.last().copied().unwrap_or(0.0);
     let is_elastic = |w: f64| w > RIGID_FREQUENCY * top;
     let elastic: Vec<usize> = (0..modes.omega.len())
@@ -689,7 +718,26 @@ fn calibrate(
         lattice.hinges.iter().map(|h| h.weight).collect(),
     );
     let masses = map.free_masses(lattice);
-    let fitted = wanted.min(omega.len());
+    // The fitted modes (indices into the elastic ones) and the weight of each one's row.
+    let targets: Vec<(usize, f64)> = match excitation {
+        None => (0..wanted.min(omega.len())).map(|j| (j, 1.0)).collect(),
+        Some(initial) => excited_targets(model, initial, &modes, &elastic)?,
+    };
+    let excited: Vec<ExcitedMode> = match excitation {
+        None => Vec::new(),
+        Some(_) => targets
+            .iter()
+            .map(|&(j, w)| ExcitedMode {
+                mode: elastic[j] + 1,
+                omega: omega[j],
+                share: w * w / targets.len() as f64,
+            })
+            .collect(),
+    };
+    let fitted = targets.len();
+    let target_shapes: Vec<Vec<f64>> = targets.iter().map(|&(j, _)| sampled[j].clone()).collect();
+    let target_omega: Vec<f64> = targets.iter().map(|&(j, _)| omega[j]).collect();
+    let reach = targets.iter().map(|&(j, _)| j + 1).max().unwrap_or(0);
     let n_c = grouping.len();
     let k0: Vec<f64> = grouping
         .classes
@@ -703,7 +751,7 @@ fn calibrate(
         }
         Ok(k)
     };
-    let n_modes = rigid.len() + 2 * fitted + RIGID_MODES;
+    let n_modes = rigid.len() + 2 * reach + RIGID_MODES;
     // Each group's pull weighs its share of its class's elements, so that one scale on a
     // whole class costs the same under either grouping.
     let pull: Vec<f64> = (0..n_c)
@@ -716,9 +764,9 @@ fn calibrate(
     let residuals = |sigma: &[f64]| -> Result<Residuals, DeriveError> {
         let k = stiffness(sigma)?;
         let (w, shapes) = springs_check::lowest_modes(&k, &masses, n_modes)?;
-        let matches = match_modes(&sampled[..fitted], &omega[..fitted], &shapes);
+        let matches = match_modes(&target_shapes, &target_omega, &shapes);
         let mut rows: Vec<(Vec<f64>, f64)> = Vec::new();
-        for (j, m) in matches.iter().enumerate() {
+        for ((m, &(_, weight)), &target) in matches.iter().zip(&targets).zip(&target_omega) {
             let Some((i, _)) = *m else { continue };
             if !is_elastic(w[i]) {
                 continue;
@@ -727,11 +775,11 @@ fn calibrate(
             let inertia: f64 = psi.iter().zip(&masses).map(|(y, m)| m * y * y).sum();
             let grad = (0..n_c)
                 .map(|c| {
-                    k0[c] * sigma[c].exp() * units[c].quadratic_form(psi)
+                    weight * k0[c] * sigma[c].exp() * units[c].quadratic_form(psi)
                         / (2.0 * w[i] * w[i] * inertia)
                 })
                 .collect();
-            rows.push((grad, (w[i] / omega[j]).ln()));
+            rows.push((grad, weight * (w[i] / target).ln()));
         }
         let mean_square = rows.iter().map(|(_, r)| r * r).sum::<f64>() / rows.len().max(1) as f64;
         let pulled: f64 = sigma.iter().zip(&pull).map(|(s, p)| (p * s).powi(2)).sum();
@@ -829,7 +877,54 @@ fn calibrate(
         residual,
         table,
         groups: grouping.report(&sigma, groups),
+        excited,
     })
+}
+
+/// The [`EXCITED_MODES`] elastic shell modes of largest share of the motion the scene's initial
+/// state and loads excite (docs/math.md §8.4, `a_j² = (φ_jᵀ M u₀ − φ_jᵀ F/ω_j²)² + (φ_jᵀ M v₀/ω_j)²`
+/// with the M-orthonormal modes `φ_j` of the shell linearized at rest), as indices into
+/// `elastic` with row weights `√(n s_j)`, `s_j` the share among the `n` kept: the rows weigh
+/// `n` in all, as `n` unweighted ones do. Refused when nothing is excited.
+fn excited_targets(
+    model: &DnurbsModel,
+    initial: &InitialConditions,
+    modes: &nurbspring_dnurbs::Modes,
+    elastic: &[usize],
+) -> Result<Vec<(usize, f64)>, DeriveError> {
+    let rest = model.reduced_coordinates(model.p0());
+    let state = initial.state(model);
+    let u0: Vec<f64> = state.q.iter().zip(&rest).map(|(a, b)| a - b).collect();
+    let m = nurbspring_sim::DynamicModel::mass(model);
+    let mut mu = vec![0.0; u0.len()];
+    m.mul_vec(&u0, &mut mu);
+    let mut mv = vec![0.0; u0.len()];
+    m.mul_vec(&state.v, &mut mv);
+    let force = model.reduced_force();
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let mut shares: Vec<(usize, f64)> = elastic
+        .iter()
+        .enumerate()
+        .map(|(j, &k)| {
+            let phi = modes.vectors.column(k);
+            let w = modes.omega[k];
+            let a2 = amplitude2(dot(&phi, &mu), dot(&phi, &mv), dot(&phi, force), w * w, w);
+            (j, a2)
+        })
+        .collect();
+    shares.sort_by(|a, b| b.1.total_cmp(&a.1));
+    shares.truncate(EXCITED_MODES);
+    let total: f64 = shares.iter().map(|s| s.1).sum();
+    if total.is_nan() || total <= 0.0 {
+        return Err(DeriveError::NoExcitation);
+    }
+    let n = shares.len() as f64;
+    shares.sort_by_key(|s| s.0);
+    Ok(shares
+        .into_iter()
+        .filter(|s| s.1 > 0.0)
+        .map(|(j, a2)| (j, (n * a2 / total).sqrt()))
+        .collect())
 }
 
 /// The one-line verdict (docs/derivations.md, "the spring derivation").

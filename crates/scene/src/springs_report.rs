@@ -189,11 +189,26 @@ pub fn springs_markdown(scene_label: &str, d: &SpringsDerivation) -> String {
             d.groups.len()
         )
     };
+    let fitted = if d.excited_modes.is_empty() {
+        format!("the shell's lowest {} modes", d.fitted_modes)
+    } else {
+        let list: Vec<String> = d
+            .excited_modes
+            .iter()
+            .map(|m| format!("{} ({:.1} %)", m.mode, 100.0 * m.share))
+            .collect();
+        format!(
+            "the {} shell modes the scene's initial state and loads move most, each weighted by \
+             its share of that motion: {}",
+            d.excited_modes.len(),
+            list.join(", ")
+        )
+    };
     let _ = writeln!(
         s,
-        "\nCalibrated on the shell's lowest {} modes with {groups} (Gauss–Newton on the log frequency ratios of the modes matched by MAC, RMS {:.3e}); \
+        "\nCalibrated on {fitted} with {groups} (Gauss–Newton on the log frequency ratios of the modes matched by MAC, RMS {:.3e}); \
          every constant then times {:.6} for the exact lowest frequency.\n",
-        d.fitted_modes, d.fit_residual, d.frequency_factor
+        d.fit_residual, d.frequency_factor
     );
     let _ = writeln!(s, "## Frequencies (matched by MAC)\n");
     let _ = writeln!(

@@ -361,26 +361,26 @@ fn derivation_refusals_name_the_key() {
     assert!(e.to_string().contains("msm.elements"), "{e}");
 }
 
-/// A shell scene takes `springs` or `modal` in `fit.derivation`; the others are refused naming
-/// the key and the derivations it takes.
+/// A shell scene takes `springs`, `modal` or `excitation` in `fit.derivation`; the others are
+/// refused naming the key and the derivations it takes.
 #[test]
-fn a_shell_scene_takes_springs_or_modal() {
+fn a_shell_scene_takes_springs_modal_or_excitation() {
     let cloth = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cloth_corners.toml"),
     )
     .unwrap();
     let with = |name: &str| format!("{cloth}\n[fit]\nderivation = \"{name}\"\n");
-    for method in [Method::Springs, Method::Modal] {
+    for method in [Method::Springs, Method::Modal, Method::Excitation] {
         let s = Scene::from_str(&with(method.name()), "cloth.toml").unwrap();
         assert_eq!(s.derivation().0, method);
         assert!(s.derives_springs(&s.choose_derivation(None)));
     }
-    for method in [Method::Paper, Method::Excitation, Method::Reduction] {
+    for method in [Method::Paper, Method::Reduction] {
         let e = Scene::from_str(&with(method.name()), "cloth.toml")
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("fit.derivation") && e.contains("\"modal\" or \"springs\""),
+            e.contains("fit.derivation") && e.contains("\"modal\", \"excitation\" or \"springs\""),
             "{e}"
         );
     }
