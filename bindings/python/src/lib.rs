@@ -644,7 +644,7 @@ fn derive<'py>(
         })
         .transpose()?;
     let choice = scene.choose_derivation(requested.map(|m| (m, "derivation")));
-    if scene.derives_springs(&choice) {
+    if scene.derives_from_shell(&choice) {
         return derive_springs(py, scene, &choice);
     }
     let derived = run_blocking(py, |cancel| -> Result<Derivation, Error> {
@@ -656,22 +656,37 @@ fn derive<'py>(
     derivation_dict(py, &label, scene, &derived, None)
 }
 
-/// The spring derivation of a Kirchhoff–Love scene: report.json and msm.json as the CLI
-/// writes them (no central-node series: its runs compare every node).
+/// The derivation of a Kirchhoff–Love scene: report.json and msm.json as the CLI writes them
+/// (a reduction: report.json, no msm.json) (no central-node series: its runs compare every node).
 fn derive_springs<'py>(
     py: Python<'py>,
     scene: &nurbspring_scene::Scene,
     choice: &nurbspring_scene::DerivationChoice,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use nurbspring_scene::springs_report::{SpringsReport, springs_msm_file};
-    let d = run_blocking(py, |cancel| {
-        nurbspring_scene::springs_report::derive_springs(scene, choice, Some(cancel), &mut |_| {})
-    })?
-    .map_err(py_err)?;
+    use nurbspring_scene::springs_report::{
+        ShellReductionReport, SpringsReport, reduce_shell, springs_msm_file,
+    };
     let label = scene.path.display().to_string();
     let out = PyDict::new(py);
-    out.set_item("report", json_text(&SpringsReport::new(&label, &d))?)?;
-    out.set_item("msm", json_text(&springs_msm_file(&label, scene, &d))?)?;
+    if choice.method == Method::Reduction {
+        let r = run_blocking(py, |cancel| reduce_shell(scene, choice, Some(cancel)))?
+            .map_err(py_err)?;
+        out.set_item("report", json_text(&ShellReductionReport::new(&label, &r))?)?;
+        // A node reduction has no msm.json (as the tension plate's).
+        out.set_item("msm", py.None())?;
+    } else {
+        let d = run_blocking(py, |cancel| {
+            nurbspring_scene::springs_report::derive_springs(
+                scene,
+                choice,
+                Some(cancel),
+                &mut |_| {},
+            )
+        })?
+        .map_err(py_err)?;
+        out.set_item("report", json_text(&SpringsReport::new(&label, &d))?)?;
+        out.set_item("msm", json_text(&springs_msm_file(&label, scene, &d))?)?;
+    }
     let empty = || f64_bytes(py, std::iter::empty());
     out.set_item("central_node", (empty(), empty(), empty()))?;
     out.set_item("warnings", Vec::<String>::new())?;

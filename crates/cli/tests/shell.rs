@@ -242,10 +242,61 @@ fn a_shell_derives_modal_springs_and_refuses_the_paper() {
         .code(2);
     let err = String::from_utf8_lossy(&refused.get_output().stderr).to_string();
     assert!(
-        err.contains("--derivation") && err.contains("\"modal\", \"excitation\" or \"springs\""),
+        err.contains("--derivation")
+            && err.contains("\"modal\", \"excitation\", \"reduction\" or \"springs\""),
         "{err}"
     );
     assert!(!dir.path().join("p").exists());
+}
+
+/// `derive --derivation reduction` of a shell writes the exact reduction of the shell
+/// linearized at rest onto the nodes' x, y and z: reduction.json with square, symmetric
+/// `3n × 3n` matrices, a report whose modes are the shell's, and no msm.json (`simulate`
+/// refuses the file, naming what it is).
+#[test]
+fn a_shell_reduces_onto_the_nodes_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    bin()
+        .arg("derive")
+        .arg(example("cantilever_strip.toml"))
+        .arg("--derivation")
+        .arg("reduction")
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(null_in(&report, "report"), None);
+    assert_eq!(report["derivation"], "reduction");
+    assert_eq!(report["kind"], "exact");
+    for f in report["frequencies"].as_array().unwrap() {
+        assert!(f["relative_error"].as_f64().unwrap().abs() < 1e-9, "{f}");
+    }
+    assert!(report["small_motion"]["relative_rms"].as_f64().unwrap() < 1e-8);
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("reduction.json")).unwrap())
+            .unwrap();
+    assert!(file["ordering"].as_str().unwrap().contains("interleaved"));
+    let n = 3 * file["free"].as_array().unwrap().len();
+    let k = file["stiffness"].as_array().unwrap();
+    assert_eq!(k.len(), n);
+    assert!(k.iter().all(|row| row.as_array().unwrap().len() == n));
+    assert_eq!(file["loads"].as_array().unwrap().len(), n / 3);
+    assert!(!out.join("msm.json").exists());
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        md.lines().nth(2).unwrap().starts_with("**Verdict.**"),
+        "{md}"
+    );
+    bin()
+        .arg("simulate")
+        .arg(out.join("reduction.json"))
+        .arg("--out")
+        .arg(dir.path().join("s"))
+        .assert()
+        .code(2);
 }
 
 /// What the spring lattice cannot carry is refused with the key: the quarter roof's symmetry

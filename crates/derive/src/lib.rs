@@ -55,6 +55,7 @@ mod reference;
 mod runner;
 mod scalar;
 mod setup;
+mod shell_reduction;
 mod springs;
 mod springs_check;
 #[cfg(test)]
@@ -80,8 +81,8 @@ pub use modal_solution::{DENSE_MODES, ModalBasis, TRUNCATED_MODES};
 pub use omega::{NodeState, Omega};
 pub use outcome::{
     Derivation, DerivedModel, ExcitationReport, FitDetail, FitReport, FrequencyRow, MassCandidate,
-    MassReport, NodeReduction, ParameterSet, ProbeError, PrunedRun, ReductionReport, Regime,
-    Spectrum, TrustRegionReport, Validation,
+    MassReport, NodeReduction, ParameterSet, ProbeError, PrunedRun, ReductionCoordinates,
+    ReductionReport, Regime, Spectrum, TrustRegionReport, Validation,
 };
 pub use pipeline::{
     Judge, MAX_SPECTRUM_DOFS, SCAN_BATCH, SelectedReading, derive_msm, evaluate, fit_step,
@@ -94,6 +95,7 @@ pub use setup::{
     Config, FitMethod, FitOptions, Fits, InitialConditions, MassChoice, MassScan, Setup,
     TimeSettings,
 };
+pub use shell_reduction::{ShellReduction, reduce_shell};
 pub use springs::{
     BAND_PULL, BAND_SPRING_MODES, CALIBRATION_ITERATIONS, ClassConstant, EXCITATION_CANDIDATES,
     ExcitedMode, GroupScale, RIGID_FREQUENCY, RIGID_MODES, SPRING_CLASSES, SPRING_MODES,

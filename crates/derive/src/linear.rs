@@ -22,8 +22,8 @@ use crate::modal::{FITTED_MODES, SampledMode, element_priors, modal_fit};
 use crate::modal_solution::ModalBasis;
 use crate::nodes::NodeMap;
 use crate::outcome::{
-    Derivation, DerivedModel, FitDetail, MassReport, NodeReduction, ParameterSet, ReductionReport,
-    Spectrum,
+    Derivation, DerivedModel, FitDetail, MassReport, NodeReduction, ParameterSet,
+    ReductionCoordinates, ReductionReport, Spectrum,
 };
 use crate::pipeline::Judge;
 use crate::reference::{run_scalar, scalar_rows};
@@ -299,35 +299,38 @@ fn node_system(
     Ok(NodeModel { system, basis })
 }
 
-/// The exact reduction of the D-NURBS onto the free nodes: `T = K⁻¹ Ωᵀ (Ω K⁻¹ Ωᵀ)⁻¹` maps node
-/// displacements to the control points of least energy, `K_T = (Ω K⁻¹ Ωᵀ)⁻¹ = Tᵀ K T`,
-/// `M_T = Tᵀ M T`, `F_T = Tᵀ f`. With one free node per free control point `T = Ω⁻¹` and the
-/// reduction is exact; with fewer it is Guyan's.
-fn reduction(
-    map: &NodeMap,
-    modes: &DnurbsModes,
-) -> Result<(DenseMatrix, DenseMatrix, Vec<[f64; 3]>), DeriveError> {
-    let sys = &modes.system;
-    let (nn, nc) = (map.free.len(), sys.n());
+/// The reduction of `M ẍ + K x = f` (`nc` unknowns) onto the coordinates `y = A x` (`nn ≤ nc`
+/// rows of A): `T = K⁻¹ Aᵀ (A K⁻¹ Aᵀ)⁻¹` maps `y` to the `x` of least energy,
+/// `K_T = (A K⁻¹ Aᵀ)⁻¹ = Tᵀ K T`, `M_T = Tᵀ M T`, loads `Tᵀ f`. With `nn = nc`, `T = A⁻¹`
+/// and the reduction is exact; with fewer it is Guyan's. Returns `(K_T, M_T, T)`;
+/// `node_of_row` names the lattice node of a row of A in the error of a singular reduction.
+pub(crate) fn least_energy_reduction(
+    k: &SparseMatrix,
+    m: &SparseMatrix,
+    a: &SparseMatrix,
+    node_of_row: &dyn Fn(usize) -> usize,
+) -> Result<(DenseMatrix, DenseMatrix, DenseMatrix), DeriveError> {
+    let (nn, nc) = (a.nrows(), a.ncols());
     if nn > nc {
         return Err(DeriveError::TooManyNodes {
             free_nodes: nn,
             control_points: nc,
         });
     }
-    let solver = SpdSolver::new(&sys.stiffness).map_err(|e| DeriveError::InvalidInput {
+    let solver = SpdSolver::new(k).map_err(|e| DeriveError::InvalidInput {
         input: Input::Material,
         value: "K".into(),
         reason: format!(
-            "the reduction needs a positive-definite stiffness on the free control points: {e}"
+            "the reduction needs a positive-definite stiffness on the free control points (none \
+             when the constraints leave the body free to move): {e}"
         ),
     })?;
-    let omega_t = map.omega_ff.transpose();
-    // Y = K⁻¹ Ωᵀ, column by column.
+    let a_t = a.transpose();
+    // Y = K⁻¹ Aᵀ, column by column.
     let mut y = DenseMatrix::zeros(nc, nn);
     for j in 0..nn {
         let mut col = vec![0.0; nc];
-        let (cp, ri, v) = (omega_t.col_ptr(), omega_t.row_idx(), omega_t.values());
+        let (cp, ri, v) = (a_t.col_ptr(), a_t.row_idx(), a_t.values());
         for k in cp[j]..cp[j + 1] {
             col[ri[k]] = v[k];
         }
@@ -336,8 +339,7 @@ fn reduction(
             y[(i, j)] = x[i];
         }
     }
-    let omega = map.omega_ff.to_dense();
-    let s = omega.matmul(&y);
+    let s = a.to_dense().matmul(&y);
     let eig = symmetric_eigen(&s)?;
     let top = eig.values.last().copied().unwrap_or(0.0);
     if let Some((i, &l)) = eig
@@ -347,13 +349,14 @@ fn reduction(
         .find(|(_, l)| **l <= 1e-13 * top)
     {
         let v = eig.vectors.column(i);
-        let worst: Vec<usize> = (0..nn)
-            .filter(|&a| v[a].abs() > 0.1)
-            .map(|a| map.free[a])
+        let mut worst: Vec<usize> = (0..nn)
+            .filter(|&r| v[r].abs() > 0.1)
+            .map(node_of_row)
             .collect();
+        worst.dedup();
         return Err(DeriveError::InvalidInput {
             input: Input::Grid,
-            value: format!("eigenvalue {l:e} of Ω K⁻¹ Ωᵀ"),
+            value: format!("eigenvalue {l:e} of A K⁻¹ Aᵀ"),
             reason: format!(
                 "the reduction is singular: the nodes {worst:?} do not determine the surface"
             ),
@@ -365,7 +368,20 @@ fn reduction(
             .sum()
     });
     let t = y.matmul(&k_t);
-    let m_t = t.transpose().matmul(&sys.mass.to_dense()).matmul(&t);
+    let m_t = t.transpose().matmul(&m.to_dense()).matmul(&t);
+    Ok((k_t, m_t, t))
+}
+
+/// The exact reduction of the D-NURBS onto the free nodes ([`least_energy_reduction`] with
+/// `A = Ω_ff`, on the scalar system): `(K_T, M_T, F_T)`.
+fn reduction(
+    map: &NodeMap,
+    modes: &DnurbsModes,
+) -> Result<(DenseMatrix, DenseMatrix, Vec<[f64; 3]>), DeriveError> {
+    let sys = &modes.system;
+    let (k_t, m_t, t) =
+        least_energy_reduction(&sys.stiffness, &sys.mass, &map.omega_ff, &|a| map.free[a])?;
+    let (nn, nc) = (t.ncols(), t.nrows());
     let mut f_t = vec![[0.0; 3]; nn];
     for a in 0..nn {
         for i in 0..nc {
@@ -377,7 +393,7 @@ fn reduction(
     Ok((k_t, m_t, f_t))
 }
 
-fn symmetric_sparse(a: &DenseMatrix) -> SparseMatrix {
+pub(crate) fn symmetric_sparse(a: &DenseMatrix) -> SparseMatrix {
     let sym = DenseMatrix::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
     SparseMatrix::from_dense(&sym, 0.0)
 }
@@ -507,6 +523,7 @@ pub(crate) fn derive_linear(
                 damping_ratio: ratio,
                 loads: f_t,
                 guyan,
+                coordinates: ReductionCoordinates::Scalar,
             };
             let fit = FitDetail::Reduction(ReductionReport {
                 free_nodes: map.free.len(),

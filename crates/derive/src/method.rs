@@ -90,21 +90,27 @@ impl Method {
         }
     }
 
-    /// True when this derivation takes a Kirchhoff–Love scene (`shell`) or a tension-plate one.
+    /// True when this derivation takes a Kirchhoff–Love scene (`shell`: a spring model, or the
+    /// reduction of the shell linearized at rest) or a tension-plate one.
     pub fn takes(self, shell: bool) -> bool {
         if shell {
-            self.spring_groups().is_some()
+            self.spring_groups().is_some() || self == Method::Reduction
         } else {
             self != Method::Springs
         }
     }
 
     /// The derivations that take a Kirchhoff–Love scene (`shell`) or a tension-plate one,
-    /// named and joined for an error message: `"springs" or "modal"`.
+    /// named and joined for an error message: `"modal", "excitation" or "springs"`.
     pub fn names_taking(shell: bool) -> String {
+        Self::names_where(|m| m.takes(shell))
+    }
+
+    /// The derivations `keep` keeps, named and joined for an error message.
+    pub fn names_where(keep: impl Fn(Method) -> bool) -> String {
         let names: Vec<String> = Self::ALL
             .into_iter()
-            .filter(|m| m.takes(shell))
+            .filter(|&m| keep(m))
             .map(|m| format!("\"{}\"", m.name()))
             .collect();
         match names.split_last() {

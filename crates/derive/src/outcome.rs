@@ -237,8 +237,34 @@ pub struct Regime {
     pub motion: f64,
 }
 
+/// What the matrices of a [`NodeReduction`] act on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReductionCoordinates {
+    /// One row per free node: the same matrices act on the x, y and z displacements (the
+    /// tension plate's three identical scalar systems).
+    Scalar,
+    /// Three rows per free node, its x, y and z displacements interleaved (a shell, whose
+    /// tangent couples the directions).
+    Xyz,
+}
+
+impl ReductionCoordinates {
+    /// What `reduction.json`'s `ordering` says.
+    pub fn ordering(self) -> &'static str {
+        match self {
+            ReductionCoordinates::Scalar => {
+                "scalar matrices on the free nodes: the same K_T, M_T act on the x, y and z displacements"
+            }
+            ReductionCoordinates::Xyz => {
+                "matrices on the free nodes' x, y and z displacements, interleaved (rows 3i, 3i + 1, 3i + 2 are free node i)"
+            }
+        }
+    }
+}
+
 /// The exact reduction of the D-NURBS onto the free nodes (the `reduction` derivation): a
-/// node-space linear model `M_T ẍ + (γ/μ) M_T ẋ + K_T x = F_T`, the same in x, y and z.
+/// node-space linear model `M_T ẍ + (γ/μ) M_T ẋ + K_T x = F_T`, the same in x, y and z (the
+/// tension plate) or on the nodes' three coordinates (a shell), [`ReductionCoordinates`].
 #[derive(Clone, Debug)]
 pub struct NodeReduction {
     /// Every node's rest position.
@@ -257,6 +283,8 @@ pub struct NodeReduction {
     pub loads: Vec<[f64; 3]>,
     /// True when there are fewer free nodes than free control points (Guyan).
     pub guyan: bool,
+    /// What the matrices act on.
+    pub coordinates: ReductionCoordinates,
 }
 
 /// What the reduction reports.

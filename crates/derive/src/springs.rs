@@ -233,8 +233,8 @@ pub fn derive_springs(
             input: crate::Input::Derivation,
             value: format!("\"{}\"", config.method.name()),
             reason: format!(
-                "a Kirchhoff–Love shell derives a spring model: {}",
-                Method::names_taking(true)
+                "the spring models of a Kirchhoff–Love shell are derived by {}",
+                Method::names_where(|m| m.spring_groups().is_some())
             ),
         })?;
     stage("the shell's modes and the calibration");
@@ -280,6 +280,7 @@ pub fn derive_springs(
         probe_nodes[0],
         &calibration.rigid,
         &calibration.first_elastic,
+        &|force| check.lattice_at_rest(force),
     )?;
     let (large_motion, large_motion_skipped) = if config.loads.is_zero() {
         (
@@ -333,7 +334,10 @@ pub fn derive_springs(
 
 /// What the lattice cannot carry: partial holds and linear constraints (its nodes are fixed
 /// whole) and edge moments (it has no rotations).
-fn refuse_unrepresentable(model: &DnurbsModel, loads: &Loads) -> Result<(), DeriveError> {
+pub(crate) fn refuse_unrepresentable(
+    model: &DnurbsModel,
+    loads: &Loads,
+) -> Result<(), DeriveError> {
     let held_whole = 3 * model.fixed_points().len();
     let held = model.dof_map().fixed().len();
     if model.has_linear_constraints() || held != held_whole {
@@ -635,6 +639,90 @@ impl Grouping {
     }
 }
 
+/// The shell's lowest modes about rest ([`DnurbsModel::modes`]): the elastic ones, sampled at
+/// the free nodes, and the rigid ones (below [`RIGID_FREQUENCY`] of the highest computed: a
+/// mechanism of the constraints).
+pub(crate) struct ShellModes {
+    /// Every mode computed.
+    pub modes: nurbspring_dnurbs::Modes,
+    /// The elastic ones (indices into `modes`).
+    pub elastic: Vec<usize>,
+    /// The rigid ones' shapes (reduced, M-orthonormal).
+    pub rigid: Vec<Vec<f64>>,
+    /// The elastic ones' angular frequencies.
+    pub omega: Vec<f64>,
+    /// The elastic ones at the free nodes, `A φ`.
+    pub sampled: Vec<Vec<f64>>,
+    top: f64,
+}
+
+impl ShellModes {
+    /// The lowest `count` elastic modes (and up to [`RIGID_MODES`] rigid ones); refused when
+    /// none is elastic.
+    pub(crate) fn new(
+        model: &DnurbsModel,
+        map: &springs_check::NodeMap,
+        count: usize,
+    ) -> Result<Self, DeriveError> {
+        let modes = model.modes((count + RIGID_MODES).min(model.n_free()))?;
+        let top = modes.omega.last().copied().unwrap_or(0.0);
+        let is_elastic = |w: f64| w > RIGID_FREQUENCY * top;
+        let elastic: Vec<usize> = (0..modes.omega.len())
+            .filter(|&j| is_elastic(modes.omega[j]))
+            .collect();
+        let rigid: Vec<Vec<f64>> = (0..modes.omega.len())
+            .filter(|&j| !is_elastic(modes.omega[j]))
+            .map(|j| modes.vectors.column(j))
+            .collect();
+        if elastic.is_empty() {
+            return Err(DeriveError::SingularFit {
+                detail: "the shell has no elastic mode among its lowest: its constraints leave \
+                         it free to move as a rigid body"
+                    .into(),
+            });
+        }
+        let omega = elastic.iter().map(|&j| modes.omega[j]).collect();
+        let sampled = elastic
+            .iter()
+            .map(|&j| map.sample_free(&modes.vectors.column(j)))
+            .collect();
+        Ok(Self {
+            modes,
+            elastic,
+            rigid,
+            omega,
+            sampled,
+            top,
+        })
+    }
+
+    /// True for a frequency above the rigid ones.
+    pub(crate) fn is_elastic(&self, w: f64) -> bool {
+        w > RIGID_FREQUENCY * self.top
+    }
+
+    /// The lowest [`TABLE_SPRING_MODES`] elastic modes, each with the node-model mode of
+    /// largest MAC among `shapes` (angular frequencies `omega`, on the free node coordinates).
+    pub(crate) fn table(&self, omega: &[f64], shapes: &[Vec<f64>]) -> Vec<SpringFrequency> {
+        let shown = TABLE_SPRING_MODES.min(self.omega.len());
+        let matches = match_modes(&self.sampled[..shown], &self.omega[..shown], shapes);
+        (0..shown)
+            .map(|j| {
+                let m = matches[j];
+                let w = self.omega[j];
+                SpringFrequency {
+                    mode: self.elastic[j] + 1,
+                    shell: w,
+                    msm_mode: m.map(|(i, _)| i + 1),
+                    msm: m.map(|(i, _)| omega[i]),
+                    mac: m.map(|(_, mac)| mac),
+                    relative_error: m.map(|(i, _)| (omega[i] - w) / w),
+                }
+            })
+            .collect()
+    }
+}
+
 /// The calibration's rows at one set of group scales.
 struct Residuals {
     /// `(∂ ln ω_i / ∂σ, ln(ω_i / ω_j))` of each matched mode.
@@ -688,28 +776,15 @@ fn calibrate(
     } else {
         wanted
     };
-    let modes = model.modes((computed + RIGID_MODES).min(model.n_free()))?;
-    let top = modes.omega.last().copied().unwrap_or(0.0);
-    let is_elastic = |w: f64| w > RIGID_FREQUENCY * top;
-    let elastic: Vec<usize> = (0..modes.omega.len())
-        .filter(|&j| is_elastic(modes.omega[j]))
-        .collect();
-    let rigid: Vec<Vec<f64>> = (0..modes.omega.len())
-        .filter(|&j| !is_elastic(modes.omega[j]))
-        .map(|j| modes.vectors.column(j))
-        .collect();
-    if elastic.is_empty() {
-        return Err(DeriveError::SingularFit {
-            detail: "the shell has no elastic mode among its lowest: its constraints leave it \
-                     free to move as a rigid body"
-                .into(),
-        });
-    }
-    let omega: Vec<f64> = elastic.iter().map(|&j| modes.omega[j]).collect();
-    let sampled: Vec<Vec<f64>> = elastic
-        .iter()
-        .map(|&j| map.sample_free(&modes.vectors.column(j)))
-        .collect();
+    let shell = ShellModes::new(model, map, computed)?;
+    let (modes, elastic, rigid, omega, sampled) = (
+        &shell.modes,
+        &shell.elastic,
+        shell.rigid.clone(),
+        &shell.omega,
+        &shell.sampled,
+    );
+    let is_elastic = |w: f64| shell.is_elastic(w);
     let x0 = lattice.flat_positions();
     let grouping = Grouping::new(lattice, groups);
     let units = grouping.units(lattice, &x0, map.free_rows());
@@ -721,7 +796,7 @@ fn calibrate(
     // The fitted modes (indices into the elastic ones) and the weight of each one's row.
     let targets: Vec<(usize, f64)> = match excitation {
         None => (0..wanted.min(omega.len())).map(|j| (j, 1.0)).collect(),
-        Some(initial) => excited_targets(model, initial, &modes, &elastic)?,
+        Some(initial) => excited_targets(model, initial, modes, elastic)?,
     };
     let excited: Vec<ExcitedMode> = match excitation {
         None => Vec::new(),
@@ -853,21 +928,7 @@ fn calibrate(
     let k = map.free_stiffness(lattice);
     let (omega_msm, shapes) =
         springs_check::lowest_modes(&k, &masses, rigid.len() + 3 * TABLE_SPRING_MODES)?;
-    let shown = TABLE_SPRING_MODES.min(omega.len());
-    let matches = match_modes(&sampled[..shown], &omega[..shown], &shapes);
-    let table = (0..shown)
-        .map(|j| {
-            let m = matches[j];
-            SpringFrequency {
-                mode: elastic[j] + 1,
-                shell: omega[j],
-                msm_mode: m.map(|(i, _)| i + 1),
-                msm: m.map(|(i, _)| omega_msm[i]),
-                mac: m.map(|(_, mac)| mac),
-                relative_error: m.map(|(i, _)| (omega_msm[i] - omega[j]) / omega[j]),
-            }
-        })
-        .collect();
+    let table = shell.table(&omega_msm, &shapes);
     Ok(Calibration {
         omega1,
         first_elastic: modes.vectors.column(elastic[0]),
@@ -990,7 +1051,7 @@ fn verdict(d: &SpringsDerivation) -> String {
     )
 }
 
-fn bounding_diagonal(x: &[[f64; 3]]) -> f64 {
+pub(crate) fn bounding_diagonal(x: &[[f64; 3]]) -> f64 {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for p in x {

@@ -84,6 +84,11 @@ impl NodeMap {
         })
     }
 
+    /// `A = Ω P` on the free nodes' coordinates (rows) and the shell's reduced ones (columns).
+    pub fn free_matrix(&self) -> &SparseMatrix {
+        &self.free
+    }
+
     /// The rows of the free nodes' coordinates in the `3N` node coordinates (the order of
     /// [`MsmModel`]'s free coordinates).
     pub fn free_rows(&self) -> &[usize] {
@@ -307,6 +312,12 @@ impl Check<'_> {
         opts
     }
 
+    /// The lattice linearized at rest on its free coordinates, loaded by the node forces doing
+    /// the work of the shell's reduced load `force` ([`NodeMap::work_equivalent`]).
+    pub fn lattice_at_rest(&self, force: &[f64]) -> Result<LinearModel, DeriveError> {
+        Ok(self.linear_lattice(self.map.work_equivalent(force)?))
+    }
+
     /// The lattice (no node forces) as a linear model on its free coordinates.
     fn linear_lattice(&self, force: Vec<f64>) -> LinearModel {
         let masses = self.map.free_masses(self.lattice);
@@ -335,7 +346,8 @@ impl Check<'_> {
     /// Both models linearized at rest, from the scene's initial velocity and displacement under
     /// its loads (or, when the scene has none of these, from the lowest mode as the initial
     /// velocity), over [`SMALL_MOTION_PERIODS`] periods; the probe node against the shell's
-    /// point at its (u, v).
+    /// point at its (u, v). `node_model` is the node model at rest on the free node
+    /// coordinates under a reduced shell load ([`Check::lattice_at_rest`], or a reduction).
     ///
     /// A shell with rigid modes (a mechanism of its constraints, e.g. a cloth held at two
     /// corners) has no linear response to a constant load: its small motion is then the
@@ -346,6 +358,7 @@ impl Check<'_> {
         probe: usize,
         rigid: &[Vec<f64>],
         first_elastic: &[f64],
+        node_model: &dyn Fn(&[f64]) -> Result<LinearModel, DeriveError>,
     ) -> Result<SmallMotion, DeriveError> {
         let model = self.model;
         let q_rest = model.reduced_coordinates(model.p0());
@@ -387,8 +400,7 @@ impl Check<'_> {
             rest: q_rest.clone(),
             force: force.clone(),
         };
-        let node_force = self.map.work_equivalent(&force)?;
-        let msm = self.linear_lattice(node_force);
+        let msm = node_model(&force)?;
         let u0: Vec<f64> = state.q.iter().zip(&q_rest).map(|(a, b)| a - b).collect();
         let msm_state = State {
             t: 0.0,

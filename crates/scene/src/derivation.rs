@@ -47,10 +47,11 @@ impl Scene {
         }
     }
 
-    /// True when `choice` derives a spring model from a Kirchhoff–Love shell
-    /// ([`crate::springs_report::derive_springs`]): every derivation of a shell scene, and
-    /// `springs` of any (the tension plate's is refused there, naming `material.model`).
-    pub fn derives_springs(&self, choice: &DerivationChoice) -> bool {
+    /// True when `choice` derives from a Kirchhoff–Love shell: every derivation of a shell
+    /// scene (a spring model, [`crate::springs_report::derive_springs`], or the reduction,
+    /// [`crate::springs_report::reduce_shell`]), and `springs` of any (the tension plate's is
+    /// refused there, naming `material.model`).
+    pub fn derives_from_shell(&self, choice: &DerivationChoice) -> bool {
         choice.method == Method::Springs || self.material.shell().is_some()
     }
 

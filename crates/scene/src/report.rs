@@ -134,7 +134,8 @@ impl<'a> Report<'a> {
 }
 
 /// `reduction.json`: the node-space model `M_T ẍ + (γ/μ) M_T ẋ + K_T x = F_T` of the
-/// `reduction` derivation, scalar and the same in x, y and z, on the free nodes.
+/// `reduction` derivation on the free nodes: scalar and the same in x, y and z (the tension
+/// plate), or on their x, y and z interleaved (a shell), as `ordering` says.
 #[derive(Serialize)]
 pub struct ReductionFile<'a> {
     /// The scene.
@@ -170,7 +171,9 @@ pub struct ReductionNode {
     pub fixed: bool,
 }
 
-fn reduction_file<'a>(
+/// The `reduction.json` of a node reduction `r` derived from the scene `scene`, with every
+/// node's initial velocity.
+pub fn reduction_file<'a>(
     scene: &'a str,
     r: &'a NodeReduction,
     velocities: &'a [[f64; 3]],
@@ -181,7 +184,7 @@ fn reduction_file<'a>(
     ReductionFile {
         scene,
         kind: if r.guyan { "guyan" } else { "exact" },
-        ordering: "scalar matrices on the free nodes: the same K_T, M_T act on the x, y and z displacements",
+        ordering: r.coordinates.ordering(),
         nodes: r
             .positions
             .iter()

@@ -1,11 +1,14 @@
 //! The files of a spring derivation (docs/math.md §11): `msm.json` (springs, hinges, masses,
 //! damping), `report.json`, `report.md` with the verdict on top, `load_path.csv` and
-//! `load_path.svg` of the large-motion load path, and the lattice as OBJ and VTK.
+//! `load_path.svg` of the large-motion load path, and the lattice as OBJ and VTK; and of a
+//! shell's reduction (§11.4): `reduction.json`, `report.json` and `report.md`.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use nurbspring_derive::{LARGE_MOTION, SpringsDerivation};
+use nurbspring_derive::{
+    LARGE_MOTION, ShellReduction, SmallMotion, SpringFrequency, SpringsDerivation,
+};
 use nurbspring_io::output::{write_csv, write_json};
 use nurbspring_io::plot::{PlotOptions, Series, plot_series_with};
 use nurbspring_msm::{FileSimulation, MsmFile};
@@ -210,38 +213,12 @@ pub fn springs_markdown(scene_label: &str, d: &SpringsDerivation) -> String {
          every constant then times {:.6} for the exact lowest frequency.\n",
         d.fit_residual, d.frequency_factor
     );
-    let _ = writeln!(s, "## Frequencies (matched by MAC)\n");
-    let _ = writeln!(
-        s,
-        "| shell mode | ω shell [rad/s] | spring mode | ω springs [rad/s] | MAC | error |"
-    );
-    let _ = writeln!(s, "|---|---|---|---|---|---|");
-    for r in &d.frequencies {
-        let opt = |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map_or("—".to_string(), f);
-        let _ = writeln!(
-            s,
-            "| {} | {:.6} | {} | {} | {} | {} |",
-            r.mode,
-            r.shell,
-            r.msm_mode.map_or("—".to_string(), |m| m.to_string()),
-            opt(r.msm, &|w| format!("{w:.6}")),
-            opt(r.mac, &|m| format!("{m:.3}")),
-            opt(r.relative_error, &|e| format!("{:+.2} %", 100.0 * e)),
-        );
-    }
-    let m = &d.small_motion;
-    let _ = writeln!(
-        s,
-        "\n## Small motion\n\nBoth models linearized at rest, moved by {}, Newmark with Δt = \
-         {:.4e} s over {:.0} periods of the lowest mode ({:.4e} s): the probe node {} against \
-         the shell's point at its (u, v), relative RMS **{:.2} %**.\n",
-        m.excitation,
-        m.dt,
-        m.periods,
-        m.t_end,
-        m.probe_node,
-        100.0 * m.relative_rms
-    );
+    s.push_str(&frequency_section(
+        &d.frequencies,
+        "spring mode",
+        "ω springs",
+    ));
+    s.push_str(&small_motion_section(&d.small_motion));
     let _ = writeln!(s, "## Large motion\n");
     match (&d.large_motion, &d.large_motion_skipped) {
         (Some(l), _) => {
@@ -311,4 +288,128 @@ pub fn springs_markdown(scene_label: &str, d: &SpringsDerivation) -> String {
         (None, None) => {}
     }
     s
+}
+
+/// The frequency table of a shell's node model: each shell mode and the model mode of largest
+/// MAC (`model` and `omega` name the model's columns).
+fn frequency_section(rows: &[SpringFrequency], model: &str, omega: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "## Frequencies (matched by MAC)\n");
+    let _ = writeln!(
+        s,
+        "| shell mode | ω shell [rad/s] | {model} | {omega} [rad/s] | MAC | error |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for r in rows {
+        let opt = |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map_or("—".to_string(), f);
+        let _ = writeln!(
+            s,
+            "| {} | {:.6} | {} | {} | {} | {} |",
+            r.mode,
+            r.shell,
+            r.msm_mode.map_or("—".to_string(), |m| m.to_string()),
+            opt(r.msm, &|w| format!("{w:.6}")),
+            opt(r.mac, &|m| format!("{m:.3}")),
+            opt(r.relative_error, &|e| relative(e, true)),
+        );
+    }
+    s
+}
+
+/// The small-motion section of a shell's node model.
+fn small_motion_section(m: &SmallMotion) -> String {
+    format!(
+        "\n## Small motion\n\nBoth models linearized at rest, moved by {}, Newmark with Δt = \
+         {:.4e} s over {:.0} periods of the lowest mode ({:.4e} s): the probe node {} against \
+         the shell's point at its (u, v), relative RMS **{}**.\n\n",
+        m.excitation,
+        m.dt,
+        m.periods,
+        m.t_end,
+        m.probe_node,
+        relative(m.relative_rms, false)
+    )
+}
+
+/// A relative error in percent, or in powers of ten below 10⁻⁴ (a reduction's round-off);
+/// `signed` shows its sign.
+fn relative(e: f64, signed: bool) -> String {
+    match (e.abs() >= 1e-4, signed) {
+        (true, true) => format!("{:+.2} %", 100.0 * e),
+        (true, false) => format!("{:.2} %", 100.0 * e),
+        (false, true) => format!("{e:+.1e}"),
+        (false, false) => format!("{e:.1e}"),
+    }
+}
+
+/// Reduces the shell of a Kirchhoff–Love scene onto its lattice nodes (`derive --derivation
+/// reduction`); errors name the scene key they come from.
+pub fn reduce_shell(
+    scene: &Scene,
+    choice: &DerivationChoice,
+    cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+) -> Result<ShellReduction, Error> {
+    let config = scene.springs_config(choice.method, choice.key)?;
+    nurbspring_derive::reduce_shell(&config, cancel)
+        .map_err(|e| scene.derive_error(crate::derivation::DERIVATION_KEY, e))
+}
+
+/// report.json of a shell's reduction.
+#[derive(Serialize)]
+pub struct ShellReductionReport<'a> {
+    scene: &'a str,
+    derivation: &'static str,
+    #[serde(flatten)]
+    detail: &'a ShellReduction,
+}
+
+impl<'a> ShellReductionReport<'a> {
+    /// The report of `r`, derived from the scene `scene_label`.
+    pub fn new(scene_label: &'a str, r: &'a ShellReduction) -> Self {
+        Self {
+            scene: scene_label,
+            derivation: nurbspring_derive::Method::Reduction.name(),
+            detail: r,
+        }
+    }
+}
+
+/// Writes every file of a shell's reduction into `out` (each atomically): `reduction.json`,
+/// `report.json` and `report.md`.
+pub fn write_shell_reduction(
+    out: &Path,
+    scene_label: &str,
+    r: &ShellReduction,
+) -> Result<(), Error> {
+    write_json(
+        out.join("reduction.json"),
+        &crate::report::reduction_file(scene_label, &r.reduction, &r.node_velocities),
+    )?;
+    write_json(
+        out.join("report.json"),
+        &ShellReductionReport::new(scene_label, r),
+    )?;
+    let mut s = String::new();
+    let _ = writeln!(s, "# Reduction of {scene_label} (derivation `reduction`)\n");
+    let _ = writeln!(s, "**Verdict.** {}.\n", r.verdict);
+    let _ = writeln!(
+        s,
+        "The Kirchhoff–Love shell linearized at rest (its tangent, consistent mass and damping \
+         at the rest state) reduced {} onto the {} free lattice nodes' x, y and z ({} shell \
+         unknowns; docs/math.md §11.4), written to `reduction.json`: a linear node-space model \
+         with dense matrices, not a spring model. Size (bounding-box diagonal) {:.6e} m.\n",
+        r.how(),
+        r.free_nodes,
+        r.shell_dofs,
+        r.size
+    );
+    s.push_str(&frequency_section(
+        &r.frequencies,
+        "reduced mode",
+        "ω reduced",
+    ));
+    s.push_str(&small_motion_section(&r.small_motion));
+    let _ = writeln!(s, "## Large motion\n\nNot run: {}.", r.large_motion_skipped);
+    nurbspring_io::atomic::write_atomic_bytes(out.join("report.md"), s.as_bytes())?;
+    Ok(())
 }

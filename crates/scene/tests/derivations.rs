@@ -361,29 +361,33 @@ fn derivation_refusals_name_the_key() {
     assert!(e.to_string().contains("msm.elements"), "{e}");
 }
 
-/// A shell scene takes `springs`, `modal` or `excitation` in `fit.derivation`; the others are
-/// refused naming the key and the derivations it takes.
+/// A shell scene takes `springs`, `modal`, `excitation` or `reduction` in `fit.derivation`;
+/// the paper's is refused naming the key and the derivations it takes.
 #[test]
-fn a_shell_scene_takes_springs_modal_or_excitation() {
+fn a_shell_scene_takes_every_derivation_but_the_papers() {
     let cloth = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cloth_corners.toml"),
     )
     .unwrap();
     let with = |name: &str| format!("{cloth}\n[fit]\nderivation = \"{name}\"\n");
-    for method in [Method::Springs, Method::Modal, Method::Excitation] {
+    for method in [
+        Method::Springs,
+        Method::Modal,
+        Method::Excitation,
+        Method::Reduction,
+    ] {
         let s = Scene::from_str(&with(method.name()), "cloth.toml").unwrap();
         assert_eq!(s.derivation().0, method);
-        assert!(s.derives_springs(&s.choose_derivation(None)));
+        assert!(s.derives_from_shell(&s.choose_derivation(None)));
     }
-    for method in [Method::Paper, Method::Reduction] {
-        let e = Scene::from_str(&with(method.name()), "cloth.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("fit.derivation") && e.contains("\"modal\", \"excitation\" or \"springs\""),
-            "{e}"
-        );
-    }
+    let e = Scene::from_str(&with(Method::Paper.name()), "cloth.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("fit.derivation")
+            && e.contains("\"modal\", \"excitation\", \"reduction\" or \"springs\""),
+        "{e}"
+    );
 }
 
 /// A scene the linear derivations cannot take falls back to the paper's unless one is named.

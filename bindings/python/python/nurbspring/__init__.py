@@ -435,8 +435,9 @@ class Derivation:
 
 def derive(scene: Scene, derivation: Optional[str] = None, progress: bool = False) -> Derivation:
     """Derives the MSM of ``scene``: ``derivation`` is ``"modal"``, ``"paper"``,
-    ``"excitation"``, ``"reduction"`` or, for a Kirchhoff–Love scene, ``"springs"`` (default:
-    the scene's ``fit.derivation``, ``"springs"`` for a shell). ``.report`` equals the CLI's
+    ``"excitation"``, ``"reduction"`` or ``"springs"`` (default: the scene's
+    ``fit.derivation``, ``"springs"`` for a shell; a Kirchhoff–Love scene takes ``"springs"``,
+    ``"modal"``, ``"excitation"`` or ``"reduction"``). ``.report`` equals the CLI's
     report.json and ``.msm`` its msm.json (a spring model's ``.central_node`` is empty: its
     runs compare every node, see the report). ``progress=True`` shows the paper derivation's
     mass scan on stderr."""

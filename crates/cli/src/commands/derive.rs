@@ -42,8 +42,12 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     let scene = Scene::from_path(&args.scene)?;
     let choice = scene.choose_derivation(args.derivation.map(|m| (m, "--derivation")));
     ctx.check_resources(&scene, Job::Derive(choice.method), Some(&args.out))?;
-    if scene.derives_springs(&choice) {
-        return run_springs(ctx, &args, &scene, &choice);
+    if scene.derives_from_shell(&choice) {
+        return if choice.method == Method::Reduction {
+            run_shell_reduction(ctx, &args, &scene, &choice)
+        } else {
+            run_springs(ctx, &args, &scene, &choice)
+        };
     }
     let prepared = scene.prepare_derivation(choice)?;
     let staged = stage_out_dir(&args.out)?;
@@ -64,6 +68,30 @@ pub fn run(ctx: &Context, args: DeriveArgs) -> CmdResult {
     }
     for w in &derivation.warnings {
         eprintln!("warning: {w}");
+    }
+    Ok(())
+}
+
+/// The reduction of a Kirchhoff–Love scene's shell onto its lattice nodes (docs/math.md §11.4).
+fn run_shell_reduction(
+    ctx: &Context,
+    args: &DeriveArgs,
+    scene: &Scene,
+    choice: &DerivationChoice,
+) -> CmdResult {
+    let staged = stage_out_dir(&args.out)?;
+    let bar = Progress::new(ctx.global.quiet, "reduction of the shell", 1);
+    let r =
+        nurbspring_scene::springs_report::reduce_shell(scene, choice, Some(ctx.cancel.clone()))?;
+    bar.finish();
+    let label = args.scene.display().to_string();
+    nurbspring_scene::springs_report::write_shell_reduction(staged.path(), &label, &r)?;
+    let out = commit_out_dir(staged)?;
+    if args.json {
+        print_report(&out)?;
+    } else {
+        println!("{}", r.verdict);
+        println!("Outputs in {}", out.display());
     }
     Ok(())
 }
