@@ -1,7 +1,7 @@
 //! The spring derivation on a family of shell scenes (docs/derivations.md, "The spring
 //! derivation"): flat, cylindrical and doubly curved; clamped, pinned at corners, free edges;
 //! 9² to 33² nets. Prints one Markdown row per scene, of the derivation METHOD (`springs`, the
-//! default, or `modal`).
+//! default, `modal`, `excitation` or `reduction`).
 //!
 //! ```text
 //! cargo run --release -p nurbspring-derive --example springs_table [-- NAME_FILTER [METHOD]]
@@ -9,7 +9,9 @@
 
 use std::time::Instant;
 
-use nurbspring_derive::{InitialConditions, Method, SpringsConfig, TimeSettings, derive_springs};
+use nurbspring_derive::{
+    InitialConditions, Method, SpringsConfig, TimeSettings, derive_springs, reduce_shell,
+};
 use nurbspring_dnurbs::obstacle::{cylinder_sector, rectangle, refined, sphere_zone};
 use nurbspring_dnurbs::{
     Constraints, DnurbsOptions, Edge, EdgeCondition, EdgeConstraint, EdgeLoad, Loads, PointLoad,
@@ -165,9 +167,9 @@ fn main() {
     let method = std::env::args()
         .nth(2)
         .map_or(Some(Method::Springs), |m| Method::parse(&m))
-        .filter(|m| m.spring_groups().is_some())
+        .filter(|&m| m.takes(true))
         .unwrap_or_else(|| {
-            eprintln!("METHOD: springs or modal");
+            eprintln!("METHOD: springs, modal, excitation or reduction");
             std::process::exit(2)
         });
     println!(
@@ -200,6 +202,28 @@ fn main() {
             method,
         };
         let start = Instant::now();
+        if method == Method::Reduction {
+            match reduce_shell(&config, None) {
+                Ok(r) => {
+                    let worst = r
+                        .frequencies
+                        .iter()
+                        .filter_map(|f| f.relative_error)
+                        .fold(0.0_f64, |a, e| a.max(e.abs()));
+                    println!(
+                        "| {} | {} free | {} ({:.1e}) | {:.1e} | — | — | {:.1} s |",
+                        case.name,
+                        r.free_nodes,
+                        r.kind,
+                        worst,
+                        r.small_motion.relative_rms,
+                        start.elapsed().as_secs_f64()
+                    );
+                }
+                Err(e) => println!("| {} | error: {e} |", case.name),
+            }
+            continue;
+        }
         match derive_springs(&config, None, &mut |_| {}) {
             Ok(d) => {
                 if std::env::var_os("SPRINGS_VERBOSE").is_some() {

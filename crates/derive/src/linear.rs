@@ -302,7 +302,9 @@ fn node_system(
 /// The reduction of `M ẍ + K x = f` (`nc` unknowns) onto the coordinates `y = A x` (`nn ≤ nc`
 /// rows of A): `T = K⁻¹ Aᵀ (A K⁻¹ Aᵀ)⁻¹` maps `y` to the `x` of least energy,
 /// `K_T = (A K⁻¹ Aᵀ)⁻¹ = Tᵀ K T`, `M_T = Tᵀ M T`, loads `Tᵀ f`. With `nn = nc`, `T = A⁻¹`
-/// and the reduction is exact; with fewer it is Guyan's. Returns `(K_T, M_T, T)`;
+/// (computed as such when A is invertible: no K⁻¹, so a body its constraints leave free to
+/// move has one too) and the reduction is exact; with fewer it is Guyan's, which needs a
+/// positive-definite K. Returns `(K_T, M_T, T)`;
 /// `node_of_row` names the lattice node of a row of A in the error of a singular reduction.
 pub(crate) fn least_energy_reduction(
     k: &SparseMatrix,
@@ -316,6 +318,41 @@ pub(crate) fn least_energy_reduction(
             free_nodes: nn,
             control_points: nc,
         });
+    }
+    // Square and invertible: T = A⁻¹, a change of coordinates that needs no K⁻¹ (so a body
+    // its constraints leave free to move has one too).
+    let inverse = || -> Option<DenseMatrix> {
+        let lu = LuSolver::new(a).ok()?;
+        let mut t = DenseMatrix::zeros(nc, nn);
+        let mut e = vec![0.0; nn];
+        for j in 0..nn {
+            e[j] = 1.0;
+            let x = lu.solve(&e);
+            e[j] = 0.0;
+            if x.iter().any(|v| !v.is_finite()) {
+                return None;
+            }
+            for (i, v) in x.into_iter().enumerate() {
+                t[(i, j)] = v;
+            }
+        }
+        Some(t)
+    };
+    if nn == nc
+        && let Some(t) = inverse()
+    {
+        let congruence = |k: &SparseMatrix| -> DenseMatrix {
+            let mut kt = DenseMatrix::zeros(nc, nn);
+            let mut y = vec![0.0; nc];
+            for j in 0..nn {
+                k.mul_vec(&t.column(j), &mut y);
+                for (i, &v) in y.iter().enumerate() {
+                    kt[(i, j)] = v;
+                }
+            }
+            t.transpose().matmul(&kt)
+        };
+        return Ok((congruence(k), congruence(m), t));
     }
     let solver = SpdSolver::new(k).map_err(|e| DeriveError::InvalidInput {
         input: Input::Material,
