@@ -4,6 +4,7 @@ a simulation, each equal to what the CLI prints or writes."""
 import json
 
 import numpy as np
+import pytest
 
 import nurbspring as ns
 
@@ -76,3 +77,12 @@ def test_modal_derivation_of_a_shell_groups_by_band():
     groups = d.report["groups"]
     assert sum(g["elements"] for g in groups) == d.report["springs"] + d.report["hinges"]
     assert abs(d.report["frequencies"][0]["relative_error"]) < 1e-9
+
+
+def test_reduction_of_a_shell_has_no_msm():
+    d = ns.derive(ns.Scene.load(STRIP), derivation="reduction")
+    assert d.report["derivation"] == "reduction" and d.report["kind"] == "exact"
+    assert d.msm is None
+    assert all(abs(f["relative_error"]) < 1e-9 for f in d.report["frequencies"])
+    with pytest.raises(ns.InputError):
+        d.mass_spring()

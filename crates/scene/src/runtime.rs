@@ -87,7 +87,12 @@ impl Scene {
         let mut at_least = false;
         let shell = self.material.shell().is_some();
         let mut terms: Vec<(f64, String)> = match method {
-            // A shell's derivations make a spring model (docs/math.md §11).
+            // A shell's reduction: dense eigenproblems on the nodes' coordinates (§11.4).
+            Method::Reduction if shell => vec![(
+                2.0 * dense(3.0 * nodes),
+                format!("the reduction's eigenproblems ({} unknowns)", 3.0 * nodes),
+            )],
+            // A shell's other derivations make a spring model (docs/math.md §11).
             _ if shell && method.takes(true) => {
                 let element = ((s.p + 1.0) * (s.q + 1.0)).powi(3);
                 let iterations = LOAD_LEVELS as f64 * SHELL_ITERATIONS_PER_LEVEL

@@ -120,3 +120,17 @@ fn pruning_implicit_runs_and_explicit_substeps_are_stated() {
     );
     assert!(large > 4.0 * small, "{small} {large}");
 }
+
+/// A shell scene's spring models are estimated by their large-motion runs, its reduction by
+/// its dense eigenproblems on the nodes' coordinates: seconds against a fraction of one.
+#[test]
+fn a_shell_reduction_is_estimated_apart_from_its_spring_models() {
+    let strip = Scene::from_path(example("cantilever_strip.toml")).unwrap();
+    let springs = strip.derive_runtime(Method::Springs);
+    let modal = strip.derive_runtime(Method::Modal);
+    let reduction = strip.derive_runtime(Method::Reduction);
+    assert!(springs.dominant.contains("large-motion"), "{springs:?}");
+    assert_eq!(modal.seconds, springs.seconds);
+    assert!(reduction.dominant.contains("reduction"), "{reduction:?}");
+    assert!(reduction.seconds < 0.01 * springs.seconds, "{reduction:?}");
+}
