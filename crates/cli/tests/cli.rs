@@ -34,8 +34,8 @@ fn scene(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 /// Every example scene passes `check`; every tension-plate example `derive`s (the
-/// Kirchhoff–Love examples are run by tests/shell.rs, their spring derivation too, and a
-/// tension-plate derivation refuses them naming material.model).
+/// Kirchhoff–Love examples are run by tests/shell.rs, their spring derivation too, and the
+/// paper's derivation refuses them naming the option and the derivations a shell takes).
 #[test]
 fn every_example_checks() {
     let mut n = 0;
@@ -60,13 +60,16 @@ fn every_example_checks() {
                     .arg("derive")
                     .arg(&path)
                     .arg("--derivation")
-                    .arg("modal")
+                    .arg("paper")
                     .arg("--out")
                     .arg(tempfile::tempdir().unwrap().path())
                     .assert()
                     .code(2);
                 let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
-                assert!(err.contains("material.model"), "{err}");
+                assert!(
+                    err.contains("--derivation") && err.contains("springs"),
+                    "{err}"
+                );
                 continue;
             }
             // Every example derives an MSM with non-negative constants and a finite error.
