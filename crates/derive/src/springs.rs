@@ -572,20 +572,8 @@ impl Grouping {
         (0..self.len())
             .map(|g| {
                 let mut only = lattice.clone();
-                only.springs = lattice
-                    .springs
-                    .iter()
-                    .zip(&self.springs)
-                    .filter(|&(_, &h)| h == g)
-                    .map(|(s, _)| *s)
-                    .collect();
-                only.hinges = lattice
-                    .hinges
-                    .iter()
-                    .zip(&self.hinges)
-                    .filter(|&(_, &h)| h == g)
-                    .map(|(e, _)| *e)
-                    .collect();
+                only.springs = members(&lattice.springs, &self.springs, g);
+                only.hinges = members(&lattice.hinges, &self.hinges, g);
                 only.unit_stiffness(self.classes[g], x)
                     .submatrix(rows, rows)
             })
@@ -721,6 +709,15 @@ impl ShellModes {
             })
             .collect()
     }
+}
+
+/// The elements of `all` whose group (in `groups`, one per element) is `g`.
+fn members<T: Copy>(all: &[T], groups: &[usize], g: usize) -> Vec<T> {
+    all.iter()
+        .zip(groups)
+        .filter(|&(_, &h)| h == g)
+        .map(|(e, _)| *e)
+        .collect()
 }
 
 /// The calibration's rows at one set of group scales.

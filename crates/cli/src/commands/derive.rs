@@ -1,6 +1,6 @@
 //! `nurbspring derive SCENE --out DIR`: the derived MSM and its validation.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 use nurbspring_scene::report::{derivation_line, write_derivation};
@@ -19,8 +19,9 @@ pub struct DeriveArgs {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
-    /// Derivation: modal (default), paper, excitation or reduction (default: the scene's
-    /// fit.derivation).
+    /// Derivation: modal, paper, excitation, reduction or springs (default: the scene's
+    /// fit.derivation, else modal; springs for a Kirchhoff–Love scene, which takes every one
+    /// but paper).
     #[arg(long, value_parser = parse_method)]
     derivation: Option<Method>,
     /// Print report.json on stdout instead of the result lines.
@@ -79,21 +80,16 @@ fn run_shell_reduction(
     scene: &Scene,
     choice: &DerivationChoice,
 ) -> CmdResult {
-    let staged = stage_out_dir(&args.out)?;
-    let bar = Progress::new(ctx.global.quiet, "reduction of the shell", 1);
-    let r =
-        nurbspring_scene::springs_report::reduce_shell(scene, choice, Some(ctx.cancel.clone()))?;
-    bar.finish();
-    let label = args.scene.display().to_string();
-    nurbspring_scene::springs_report::write_shell_reduction(staged.path(), &label, &r)?;
-    let out = commit_out_dir(staged)?;
-    if args.json {
-        print_report(&out)?;
-    } else {
-        println!("{}", r.verdict);
-        println!("Outputs in {}", out.display());
-    }
-    Ok(())
+    staged_run(ctx, args, "reduction of the shell", |out, _| {
+        let r = nurbspring_scene::springs_report::reduce_shell(
+            scene,
+            choice,
+            Some(ctx.cancel.clone()),
+        )?;
+        let label = args.scene.display().to_string();
+        nurbspring_scene::springs_report::write_shell_reduction(out, &label, &r)?;
+        Ok(r.verdict)
+    })
 }
 
 /// The spring derivation of a Kirchhoff–Love scene (docs/math.md §11).
@@ -103,29 +99,43 @@ fn run_springs(
     scene: &Scene,
     choice: &DerivationChoice,
 ) -> CmdResult {
-    let staged = stage_out_dir(&args.out)?;
-    let bar = Progress::new(ctx.global.quiet, "spring derivation", 1);
-    let d = nurbspring_scene::springs_report::derive_springs(
-        scene,
-        choice,
-        Some(ctx.cancel.clone()),
-        &mut |stage| bar.set_message(&format!("spring derivation, {stage}")),
-    )?;
-    bar.finish();
-    let label = args.scene.display().to_string();
-    nurbspring_scene::springs_report::write_springs(staged.path(), &label, scene, &d)?;
-    let out = commit_out_dir(staged)?;
-    if args.json {
-        print_report(&out)?;
-    } else {
-        println!(
+    staged_run(ctx, args, "spring derivation", |out, bar| {
+        let d = nurbspring_scene::springs_report::derive_springs(
+            scene,
+            choice,
+            Some(ctx.cancel.clone()),
+            &mut |stage| bar.set_message(&format!("spring derivation, {stage}")),
+        )?;
+        let label = args.scene.display().to_string();
+        nurbspring_scene::springs_report::write_springs(out, &label, scene, &d)?;
+        Ok(format!(
             "derived spring model ({}): {} nodes, {} springs, {} hinges; {}",
             d.method.name(),
             d.lattice.n_nodes(),
             d.lattice.springs.len(),
             d.lattice.hinges.len(),
             d.verdict
-        );
+        ))
+    })
+}
+
+/// Runs `work` into a staged output folder with a progress line named `what`, commits the
+/// folder whole, then prints report.json (`--json`) or the summary line `work` returns.
+fn staged_run(
+    ctx: &Context,
+    args: &DeriveArgs,
+    what: &str,
+    work: impl FnOnce(&Path, &Progress) -> Result<String, nurbspring_scene::Error>,
+) -> CmdResult {
+    let staged = stage_out_dir(&args.out)?;
+    let bar = Progress::new(ctx.global.quiet, what, 1);
+    let summary = work(staged.path(), &bar)?;
+    bar.finish();
+    let out = commit_out_dir(staged)?;
+    if args.json {
+        print_report(&out)?;
+    } else {
+        println!("{summary}");
         println!("Outputs in {}", out.display());
     }
     Ok(())
