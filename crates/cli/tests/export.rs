@@ -5,16 +5,12 @@
 use std::path::{Path, PathBuf};
 use std::process::Command as Process;
 
-use assert_cmd::Command;
 use nurbspring_exchange::{Shape, geomdl, iges, obj};
 use nurbspring_geom::{NurbsCurve, NurbsSurface};
 use nurbspring_scene::Scene;
 
-fn bin() -> Command {
-    let mut c = Command::cargo_bin("nurbspring").unwrap();
-    c.arg("--quiet");
-    c
-}
+mod support;
+use support::bin;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")

@@ -5,20 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use assert_cmd::Command;
-
 mod support;
-use support::null_in;
-
-fn bin() -> Command {
-    let mut c = Command::cargo_bin("nurbspring").unwrap();
-    c.arg("--quiet");
-    c
-}
-
-fn paper() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper.toml")
-}
+use support::{bin, null_in, paper};
 
 /// The paper's scene with `replace` applied to its text.
 fn paper_with(dir: &Path, from: &str, to: &str) -> PathBuf {

@@ -2,28 +2,8 @@
 //! benchmarks (docs/shell.md): the Scordelis–Lo roof, Sze's cantilever under end shear at every
 //! tabulated load level, and the cloth held at two corners falling under gravity.
 
-use std::path::PathBuf;
-
-use assert_cmd::Command;
-
 mod support;
-use support::null_in;
-
-fn bin() -> Command {
-    let mut c = Command::cargo_bin("nurbspring").unwrap();
-    c.arg("--quiet");
-    c
-}
-
-fn example(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-}
-
-fn json_of(out: &[u8]) -> serde_json::Value {
-    serde_json::from_slice(out).unwrap()
-}
+use support::{bin, example, json_of, null_in};
 
 /// `steady --linear` of the quarter roof: the free edge's midpoint sinks by 0.3006 (the
 /// Kirchhoff–Love value; degree 4 on 16² spans gives 0.300592, Kratos' Shell3pElement
