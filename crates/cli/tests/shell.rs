@@ -144,6 +144,13 @@ fn cloth_derives_springs_and_hinges_that_simulate() {
     assert_eq!(null_in(&report, "report"), None);
     assert_eq!(report["derivation"], "springs");
     assert!(report["large_motion"]["static_failure"].is_string());
+    // The dynamic run's shell is a reference: its energy does not rise.
+    let dynamic = &report["large_motion"]["dynamic"];
+    assert_eq!(dynamic["rho_infinity"], 0.5);
+    assert!(
+        dynamic["shell_energy_gain"].as_f64().unwrap() <= 0.1,
+        "{dynamic}"
+    );
     let first = report["frequencies"][0]["relative_error"].as_f64().unwrap();
     assert!(first.abs() < 1e-9, "{first}");
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();

@@ -263,11 +263,12 @@ pub fn springs_markdown(scene_label: &str, d: &SpringsDerivation) -> String {
                 (Some(r), _) => {
                     let _ = writeln!(
                         s,
-                        "\nDynamic: the same loads applied at once, both models by {} with Δt = \
+                        "\nDynamic: the same loads applied at once, both models by {} (ρ∞ = {}) with Δt = \
                          {:.4e} s over {:.4e} s ({:.0} periods of the lowest elastic mode; the \
                          shell's farthest node reaches {:.1} % of the size): largest node error \
                          {:.2} % of the size, RMS over nodes and time {:.2} %.",
                         r.integrator,
+                        r.rho_infinity,
                         r.dt,
                         r.t_end,
                         r.periods,
