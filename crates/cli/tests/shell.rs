@@ -3,7 +3,7 @@
 //! tabulated load level, and the cloth held at two corners falling under gravity.
 
 mod support;
-use support::{bin, example, json_of, null_in};
+use support::{bin, example, json_of, null_in, stderr_of};
 
 /// `steady --linear` of the quarter roof: the free edge's midpoint sinks by 0.3006 (the
 /// Kirchhoff–Love value; degree 4 on 16² spans gives 0.300592, Kratos' Shell3pElement
@@ -79,13 +79,18 @@ fn cantilever_example_follows_the_sze_table() {
 fn cloth_example_falls_without_gaining_energy() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cloth");
-    bin()
+    let run = bin()
         .arg("simulate")
         .arg(example("cloth_corners.toml"))
         .args(["--model", "dnurbs", "--t-end", "0.3", "--out"])
         .arg(&out)
         .assert()
         .success();
+    assert!(
+        !stderr_of(&run).contains("gains energy"),
+        "{}",
+        stderr_of(&run)
+    );
     let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
     let rows: Vec<Vec<f64>> = energy
         .lines()
@@ -121,6 +126,30 @@ fn cloth_example_falls_without_gaining_energy() {
         first[9] - last[9] > 0.05,
         "the free corner fell by {}",
         first[9] - last[9]
+    );
+}
+
+/// A run whose energy rises more than its dynamics can make it is flagged: the cloth with
+/// generalized-α at ρ∞ = 0.8 gains energy from about 1 s on (docs/math.md §11.2).
+#[test]
+fn a_run_that_gains_energy_is_flagged() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(example("cloth_corners.toml"))
+        .unwrap()
+        .replace("rho_infinity = 0.5", "rho_infinity = 0.8");
+    let scene = dir.path().join("cloth.toml");
+    std::fs::write(&scene, text).unwrap();
+    let run = bin()
+        .arg("simulate")
+        .arg(&scene)
+        .args(["--model", "dnurbs", "--t-end", "1.1", "--out"])
+        .arg(dir.path().join("run"))
+        .assert()
+        .success();
+    let err = stderr_of(&run);
+    assert!(
+        err.contains("gains energy") && err.contains("rho_infinity"),
+        "{err}"
     );
 }
 

@@ -103,9 +103,9 @@ pub use springs::{
     TABLE_SPRING_MODES, derive_springs, rule_lattice,
 };
 pub use springs_check::{
-    BELOW_LIMIT, DynamicRun, ENERGY_GAIN_LIMIT, LARGE_MOTION, LARGE_MOTION_PERIODS,
-    LARGE_MOTION_RHO_INFINITY, LOAD_LEVELS, LargeMotion, LoadLevelError, NodeMap,
-    SMALL_MOTION_PERIODS, STEPS_PER_PERIOD, SmallMotion, StaticPath, lowest_modes, static_path,
+    BELOW_LIMIT, DynamicRun, LARGE_MOTION, LARGE_MOTION_PERIODS, LARGE_MOTION_RHO_INFINITY,
+    LOAD_LEVELS, LargeMotion, LoadLevelError, NodeMap, SMALL_MOTION_PERIODS, STEPS_PER_PERIOD,
+    SmallMotion, StaticPath, lowest_modes, static_path,
 };
 pub use validation::{
     Comparison, ModalTruncation, REPEATED_FREQUENCY, Trajectory, compare, compare_points,

@@ -332,6 +332,9 @@ pub fn simulate_dnurbs(
         result,
     )?;
     simulated.warnings = model.quadrature().warning().into_iter().collect();
+    simulated
+        .warnings
+        .extend(energy_warning(&simulated.trajectory));
     simulated.probe_labels = probe_params
         .iter()
         .map(|&uv| probe_label(None, Some(uv), curve))
@@ -445,6 +448,24 @@ pub fn explicit_schedule(
         return Ok((Schedule::plain(requested), None));
     }
     Schedule::stable(model, q, requested, dt)
+}
+
+/// The warning of a D-NURBS run whose total energy rose more than its dynamics can make it
+/// ([`nurbspring_sim::EnergyWatch`]: its loads are dead and its damping only removes energy).
+fn energy_warning(trajectory: &nurbspring_derive::Trajectory) -> Option<String> {
+    let mut watch = nurbspring_sim::EnergyWatch::default();
+    for &[kinetic, elastic, external] in &trajectory.energy {
+        watch.observe(kinetic, elastic + external);
+    }
+    watch.unstable().then(|| {
+        format!(
+            "the run gains energy ({:.3} of its largest kinetic energy; its loads are dead and \
+             its damping only removes energy): the integrator is unstable at this step, so the \
+             motion is not the model's; lower simulation.rho_infinity (0.5 damps what the step \
+             cannot resolve) or simulation.dt",
+            watch.gain()
+        )
+    })
 }
 
 /// The warning of a run whose schedule differs from plain steps of the requested integrator.

@@ -32,8 +32,8 @@ pub use integrators::{NewtonSettings, Stepper, make_stepper, make_stepper_with_o
 pub use model::{ConfigurationDamping, DynamicModel, FusedStep, LinearModel, SystemMatrix};
 pub use nurbspring_linalg::{LinalgError, SparseMatrix};
 pub use run::{
-    IMPLICIT_FALLBACK, IntegratorKind, MAX_MAGNITUDE, MAX_STEPS, MAX_SUBSTEPS, NullObserver,
-    Observer, RunOptions, RunSummary, SUBSTEP_MARGIN, Sample, Schedule, StabilityLimit, State,
-    check_time, explicit_substeps, representable, simulate, stability_limit, step_count,
-    uniform_stability_limit,
+    ENERGY_GAIN_LIMIT, EnergyWatch, IMPLICIT_FALLBACK, IntegratorKind, MAX_MAGNITUDE, MAX_STEPS,
+    MAX_SUBSTEPS, NullObserver, Observer, RunOptions, RunSummary, SUBSTEP_MARGIN, Sample, Schedule,
+    StabilityLimit, State, check_time, explicit_substeps, representable, simulate, stability_limit,
+    step_count, uniform_stability_limit,
 };

@@ -213,6 +213,59 @@ impl RunOptions {
     }
 }
 
+/// The largest [`EnergyWatch::gain`] of a run that can be trusted: its loads are dead and its
+/// damping only removes energy, so a lasting rise of its total energy is its integrator's. An
+/// implicit scheme's energy is not monotone from step to step (generalized-α on an undamped
+/// plate under a step load rises by 1.2 % of its largest kinetic energy); an unstable run is far
+/// beyond (a thin cloth's shell at ρ∞ = 0.8 gains about a hundred times its kinetic energy
+/// within 1.5 s; docs/math.md §11.2).
+pub const ENERGY_GAIN_LIMIT: f64 = 0.1;
+
+/// Follows a run's total energy (kinetic + potential, [`Sample`]) for a rise the dynamics
+/// cannot make.
+///
+/// ```
+/// use nurbspring_sim::EnergyWatch;
+/// let mut w = EnergyWatch::default();
+/// w.observe(0.0, 1.0);
+/// w.observe(2.0, -1.0); // energy exchanged, the total kept
+/// w.observe(1.0, 0.5); // the total rises by 0.5: a quarter of the largest kinetic energy
+/// assert!((w.gain() - 0.25).abs() < 1e-15);
+/// ```
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EnergyWatch {
+    start: Option<f64>,
+    top: f64,
+    kinetic: f64,
+}
+
+impl EnergyWatch {
+    /// One sample's kinetic and potential energy.
+    pub fn observe(&mut self, kinetic: f64, potential: f64) {
+        let total = kinetic + potential;
+        if self.start.is_none() {
+            self.start = Some(total);
+            self.top = total;
+        }
+        self.top = self.top.max(total);
+        self.kinetic = self.kinetic.max(kinetic);
+    }
+
+    /// The largest rise of the total energy over its start, over the largest kinetic energy
+    /// (0 for a run that never moved or never rose).
+    pub fn gain(&self) -> f64 {
+        match self.start {
+            Some(e0) if self.kinetic > 0.0 => ((self.top - e0) / self.kinetic).max(0.0),
+            _ => 0.0,
+        }
+    }
+
+    /// True when the run gained more than [`ENERGY_GAIN_LIMIT`].
+    pub fn unstable(&self) -> bool {
+        self.gain() > ENERGY_GAIN_LIMIT
+    }
+}
+
 /// What an [`Observer`] sees at t = 0 (step 0) and after every step.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample<'a> {
