@@ -310,13 +310,14 @@ pub(super) fn calibrate(
         wanted
     };
     let shell = ShellModes::new(model, map, computed)?;
-    let (modes, elastic, rigid, omega, sampled) = (
-        &shell.modes,
-        &shell.elastic,
-        shell.rigid.clone(),
-        &shell.omega,
-        &shell.sampled,
-    );
+    let ShellModes {
+        modes,
+        elastic,
+        rigid,
+        omega,
+        sampled,
+        ..
+    } = &shell;
     let is_elastic = |w: f64| shell.is_elastic(w);
     let x0 = lattice.flat_positions();
     let grouping = Grouping::new(lattice, groups);
@@ -465,7 +466,7 @@ pub(super) fn calibrate(
     Ok(Calibration {
         omega1,
         first_elastic: modes.vectors.column(elastic[0]),
-        rigid,
+        rigid: rigid.clone(),
         factor,
         fitted,
         residual,
